@@ -1,0 +1,13 @@
+//! beeswarm: honeybee swarm simulation after Chen et al., "A Bio-inspired Model for Bee
+//! Simulations" (paper 000), baked to glTF 2.0, USDA and CSV caches.
+//!
+//! Conventions everywhere: metres, seconds, world Y-up right-handed; quaternions are
+//! glam `Quat` (x, y, z, w) body → world; body X forward, Y up, Z right.
+
+pub mod error;
+pub mod export;
+pub mod model;
+pub mod shot;
+pub mod sim;
+
+pub use error::{Error, Result};

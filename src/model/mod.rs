@@ -1,0 +1,3 @@
+//! The bee model of paper 000, one file per force, and the baselines.
+pub mod params;
+pub use params::BeeParams;

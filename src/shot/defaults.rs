@@ -1,0 +1,37 @@
+//! Every default value of the shot format, in one place (documented in docs/shot-format.md).
+
+pub const SHOT_NAME: &str = "beeswarm";
+pub const FPS: f64 = 24.0;
+pub const FRAMES: [i64; 2] = [1, 120];
+pub const SUBSTEPS: i64 = 4;
+pub const SEED: i64 = 1;
+
+pub const SWARM_NAME: &str = "swarm";
+pub const MODEL: &str = "bee";
+pub const PRESET: &str = "nest";
+pub const SPAWN_CENTER: [f64; 3] = [0.0, 1.0, 0.0];
+pub const SPAWN_SIZE: [f64; 3] = [1.0, 1.0, 1.0];
+/// Default soft bounds: the spawn box grown by this margin on every side, m.
+pub const BOUNDS_MARGIN: f64 = 1.5;
+
+pub const VARIATION_SIZE: f64 = 0.1;
+pub const VARIATION_SPEED: f64 = 0.15;
+pub const VARIATION_PHASE: f64 = 1.0;
+
+/// A honeybee worker (Apis mellifera).
+pub const BEE_LENGTH: f64 = 0.012;
+pub const BEE_RADIUS: f64 = 0.002;
+pub const BEE_MASS: f64 = 1.0e-4;
+pub const BEE_WING_AREA: f64 = 4.0e-5;
+pub const BEE_WING_BEAT_HZ: f64 = 230.0;
+
+/// Per target kind: (radius m, strength m/s²).
+pub const NEST: (f64, f64) = (0.08, 3.0);
+pub const FLOWER: (f64, f64) = (0.03, 2.0);
+pub const ATTRACTOR: (f64, f64) = (0.05, 2.0);
+
+pub const OUTPUT_DIR: &str = "out";
+pub const OUTPUT_FORMATS: [&str; 2] = ["glb", "usda"];
+/// Visible wing flap rate in glTF, Hz (the real 230 Hz would alias at any frame rate).
+pub const WING_FLAP_HZ: f64 = 0.0;
+pub const USDA_CLIP_FRAMES: i64 = 0;

@@ -1,0 +1,266 @@
+//! Shots: the TOML file an artist writes (schema), its defaults, and its validation.
+//!
+//! `load` reads a file, `parse` reads text; both return a fully resolved [`Shot`] or a
+//! [`ShotError`] naming file, line, column and key. See docs/shot-format.md.
+
+pub mod defaults;
+pub mod locate;
+mod resolve;
+pub mod schema;
+
+use crate::error::ShotError;
+use crate::export::{Format, OutputOptions};
+use crate::model::BeeParams;
+use glam::{Quat, Vec3};
+use std::path::{Path, PathBuf};
+
+/// The default shot baked by `beeswarm bake` without a file.
+pub const EMBEDDED_DEFAULT: &str = include_str!("default_shot.toml");
+
+/// A validated shot with every default filled in.
+#[derive(Clone, Debug)]
+pub struct Shot {
+    /// File name stem used for every output (`<name>.glb`, ...).
+    pub name: String,
+    pub fps: f64,
+    /// First and last frame, inclusive; the first frame records the initial state.
+    pub frame_start: i32,
+    pub frame_end: i32,
+    /// Integration steps per frame.
+    pub substeps: u32,
+    pub seed: u64,
+    pub swarms: Vec<Swarm>,
+    pub obstacles: Vec<Obstacle>,
+    pub targets: Vec<Target>,
+    /// Constant wind velocity, m/s.
+    pub wind: Vec3,
+    pub output: Output,
+}
+
+impl Shot {
+    pub fn frame_count(&self) -> usize {
+        (self.frame_end - self.frame_start + 1) as usize
+    }
+    pub fn bee_count(&self) -> usize {
+        self.swarms.iter().map(|s| s.count).sum()
+    }
+    /// Integration time step, seconds.
+    pub fn dt(&self) -> f64 {
+        1.0 / (self.fps * self.substeps as f64)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelKind {
+    /// Paper 000's bio-inspired bee model.
+    Bee,
+    /// Baseline: white-noise force with friction.
+    Brownian,
+    /// Baseline: Reynolds' separation, alignment, cohesion.
+    Boids,
+}
+
+impl ModelKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Bee => "bee",
+            ModelKind::Brownian => "brownian",
+            ModelKind::Boids => "boids",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Swarm {
+    /// Identifier-safe name, unique in the shot.
+    pub name: String,
+    pub count: usize,
+    pub model: ModelKind,
+    /// Name of the preset the parameters started from (or the preset file path).
+    pub preset: String,
+    pub params: BeeParams,
+    pub spawn: Region,
+    pub variation: Variation,
+    pub bee: BeeBody,
+    /// Soft containment box (centre, half extents); `None` = unbounded.
+    pub bounds: Option<(Vec3, Vec3)>,
+}
+
+/// A volume bees are spawned in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Region {
+    Box { center: Vec3, half: Vec3 },
+    Sphere { center: Vec3, radius: f32 },
+}
+
+impl Region {
+    pub fn center(&self) -> Vec3 {
+        match *self {
+            Region::Box { center, .. } | Region::Sphere { center, .. } => center,
+        }
+    }
+    /// Half extents of the bounding box.
+    pub fn half_extents(&self) -> Vec3 {
+        match *self {
+            Region::Box { half, .. } => half,
+            Region::Sphere { radius, .. } => Vec3::splat(radius),
+        }
+    }
+}
+
+/// Per-bee variation, as fractions: each bee draws a factor in [1 − v, 1 + v].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Variation {
+    pub size: f32,
+    pub speed: f32,
+    /// Spread of the oscillation phase as a fraction of a cycle (1 = fully random).
+    pub phase: f32,
+}
+
+/// The physical bee. Defaults are a honeybee worker.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeeBody {
+    /// Body length, m.
+    pub length: f32,
+    /// Capsule radius r of Eq. 10–11, m.
+    pub radius: f32,
+    /// Mass, kg.
+    pub mass: f32,
+    /// Total wing area A of Eq. 2, m².
+    pub wing_area: f32,
+    /// Real wing beat frequency, Hz.
+    pub wing_beat_hz: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Obstacle {
+    pub name: String,
+    pub shape: Shape,
+}
+
+/// Obstacle geometry. Rotations are body → world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// Oriented box: centre, half extents, rotation.
+    Box {
+        center: Vec3,
+        half: Vec3,
+        rotation: Quat,
+    },
+    /// A shaft: segment a–b with round ends.
+    Capsule {
+        a: Vec3,
+        b: Vec3,
+        radius: f32,
+    },
+    /// Flat-capped cylinder along its local +Y, `half_height` each way from the centre.
+    Cylinder {
+        center: Vec3,
+        radius: f32,
+        half_height: f32,
+        rotation: Quat,
+    },
+    /// Infinite plane through `point`; bees stay on the `normal` side.
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TargetKind {
+    /// A hive entrance: attracts, and is sampled with virtual particles that push back.
+    Nest,
+    /// A flower: like a nest, smaller and weaker by default.
+    Flower,
+    /// A pure attractor, with no body.
+    Attractor,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Target {
+    pub name: String,
+    pub kind: TargetKind,
+    /// Position keys (frame, position), sorted by frame; one key = static.
+    pub keys: Vec<(f64, Vec3)>,
+    /// Size of the target body, m (nests and flowers are sampled on this sphere).
+    pub radius: f32,
+    /// Attraction, m/s².
+    pub strength: f32,
+    /// Attraction acts within this distance, m; `f32::INFINITY` = everywhere.
+    pub reach: f32,
+    /// Indices of the swarms it attracts (all when the shot names none).
+    pub swarms: Vec<usize>,
+}
+
+impl Target {
+    /// Position at a (fractional) frame: linear between keys, held outside them.
+    pub fn position_at(&self, frame: f64) -> Vec3 {
+        let k = &self.keys;
+        if frame <= k[0].0 {
+            return k[0].1;
+        }
+        for w in k.windows(2) {
+            let ((f0, p0), (f1, p1)) = (w[0], w[1]);
+            if frame <= f1 {
+                let t = if f1 > f0 {
+                    ((frame - f0) / (f1 - f0)) as f32
+                } else {
+                    1.0
+                };
+                return p0.lerp(p1, t);
+            }
+        }
+        k[k.len() - 1].1
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Output {
+    /// Output folder (relative paths are relative to the shot file's folder).
+    pub dir: PathBuf,
+    pub formats: Vec<Format>,
+    pub preview: bool,
+    pub options: OutputOptions,
+}
+
+/// Reads and resolves a shot file.
+pub fn load(path: &Path) -> Result<Shot, ShotError> {
+    let src = std::fs::read_to_string(path).map_err(|e| ShotError {
+        file: path.to_path_buf(),
+        line: 0,
+        column: 0,
+        key: String::new(),
+        message: match e.kind() {
+            std::io::ErrorKind::NotFound => "no such shot file".to_owned(),
+            std::io::ErrorKind::InvalidData => {
+                "not a text file (expected TOML in UTF-8)".to_owned()
+            }
+            _ => format!("cannot read the shot file: {e}"),
+        },
+        source_line: None,
+        hint: None,
+    })?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse(&src, path, &base)
+}
+
+/// Resolves shot text. `file` names it in errors; `base` is the folder relative paths
+/// (preset files, the output folder) are resolved against.
+pub fn parse(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
+    resolve::resolve(src, file, base)
+}
+
+/// The embedded default shot (a hive entrance with an obstacle), writing to `./out/`.
+pub fn embedded_default() -> Shot {
+    parse(
+        EMBEDDED_DEFAULT,
+        Path::new("<embedded default shot>"),
+        Path::new("."),
+    )
+    .expect("the embedded default shot is valid")
+}

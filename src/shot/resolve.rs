@@ -1,0 +1,885 @@
+//! Raw shot → validated [`Shot`]: fills defaults, checks every value, and locates every
+//! error in the text.
+
+use super::defaults as d;
+use super::locate::Locator;
+use super::schema::*;
+use super::*;
+use crate::error::ShotError;
+use crate::export::Format;
+use crate::model::BeeParams;
+
+struct Ctx<'a> {
+    file: &'a Path,
+    loc: Locator<'a>,
+}
+
+impl Ctx<'_> {
+    /// An error about the value at `path`.
+    fn err(&self, path: &str, message: impl Into<String>) -> ShotError {
+        let (line, column, source_line) = match self.loc.span_of(path) {
+            Some(span) => {
+                let (l, c, s) = self.loc.line_col(span.start);
+                (l, c, Some(s))
+            }
+            None => (0, 0, None),
+        };
+        ShotError {
+            file: self.file.to_path_buf(),
+            line,
+            column,
+            key: path.to_owned(),
+            message: message.into(),
+            source_line,
+            hint: None,
+        }
+    }
+
+    fn hint(&self, path: &str, message: impl Into<String>, hint: impl Into<String>) -> ShotError {
+        let mut e = self.err(path, message);
+        e.hint = Some(hint.into());
+        e
+    }
+
+    /// A number that must lie in [lo, hi].
+    fn range(&self, path: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, ShotError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("expected {what}, found {v}")))
+        }
+    }
+
+    fn positive(&self, path: &str, v: f64) -> Result<f64, ShotError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("expected a number greater than 0, found {v}")))
+        }
+    }
+
+    fn non_negative(&self, path: &str, v: f64) -> Result<f64, ShotError> {
+        self.range(path, v, 0.0, f64::MAX, "a number of at least 0")
+    }
+
+    fn vec(&self, path: &str, v: V3) -> Result<Vec3, ShotError> {
+        if v.iter().all(|x| x.is_finite() && x.abs() < 1e6) {
+            Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
+        } else {
+            Err(self.err(path, "expected three finite numbers within ±1e6 m"))
+        }
+    }
+
+    fn size(&self, path: &str, v: V3) -> Result<Vec3, ShotError> {
+        let s = self.vec(path, v)?;
+        if s.min_element() > 0.0 {
+            Ok(s)
+        } else {
+            Err(self.err(
+                path,
+                format!("expected three sizes greater than 0, found {v:?}"),
+            ))
+        }
+    }
+
+    fn required<T: Clone>(&self, path: &str, v: &Option<T>, what: &str) -> Result<T, ShotError> {
+        v.clone().ok_or_else(|| {
+            self.err(
+                path,
+                format!(
+                    "missing key `{}`: expected {what}",
+                    path.rsplit('.').next().unwrap_or(path)
+                ),
+            )
+        })
+    }
+
+    fn one_of<'s>(&self, path: &str, v: &str, options: &[&'s str]) -> Result<&'s str, ShotError> {
+        options.iter().find(|o| **o == v).copied().ok_or_else(|| {
+            self.err(
+                path,
+                format!("expected one of {}, found \"{v}\"", quoted(options)),
+            )
+        })
+    }
+}
+
+fn quoted(options: &[&str]) -> String {
+    options
+        .iter()
+        .map(|o| format!("\"{o}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn is_identifier(s: &str) -> bool {
+    let mut c = s.chars();
+    matches!(c.next(), Some(ch) if ch.is_ascii_alphabetic() || ch == '_')
+        && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+}
+
+/// Rewrites serde's type names into words an artist reads.
+fn friendly(msg: &str) -> String {
+    let mut m = msg.trim().to_owned();
+    for (from, to) in [
+        ("expected i64", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected a boolean", "expected true or false"),
+        (
+            "expected an array of length 3",
+            "expected a list of three numbers [x, y, z]",
+        ),
+        (
+            "expected an array of length 2",
+            "expected a list of two frame numbers [start, end]",
+        ),
+        ("expected a sequence", "expected a list"),
+        ("expected struct", "expected a table"),
+    ] {
+        m = m.replace(from, to);
+    }
+    m
+}
+
+pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
+    let cx = Ctx {
+        file,
+        loc: Locator::new(src),
+    };
+    let raw: RawShot = match toml::from_str(src) {
+        Ok(r) => r,
+        Err(e) => {
+            let span = e.span().unwrap_or(0..0);
+            let key = cx.loc.path_at(span.start).unwrap_or_default();
+            let (line, column, source_line) = cx.loc.line_col(span.start);
+            let mut message = friendly(e.message());
+            let mut hint = None;
+            if message.starts_with("unknown field") {
+                hint = Some("check the spelling; docs/shot-format.md lists every key".to_owned());
+            } else if key.is_empty() && !message.contains("missing field") {
+                message = format!("not valid TOML: {message}");
+            }
+            return Err(ShotError {
+                file: file.to_path_buf(),
+                line,
+                column,
+                key,
+                message,
+                source_line: Some(source_line),
+                hint,
+            });
+        }
+    };
+    if let Some(p) = cx.loc.non_finite.first() {
+        return Err(cx.err(p, "expected a finite number, found nan or inf"));
+    }
+
+    // [scene]
+    let scene = raw.scene.clone().unwrap_or_default();
+    let default_name = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().trim_end_matches(".shot").to_owned())
+        .filter(|s| !s.is_empty() && !s.starts_with('<'))
+        .unwrap_or_else(|| d::SHOT_NAME.to_owned());
+    let name = scene.name.clone().unwrap_or(default_name);
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
+        || name.starts_with('.')
+    {
+        return Err(cx.hint(
+            "scene.name",
+            format!("expected a file-safe name (letters, digits, _ - .), found \"{name}\""),
+            "the name becomes the output file names, e.g. <name>.glb",
+        ));
+    }
+    let fps = cx.range(
+        "scene.fps",
+        scene.fps.unwrap_or(d::FPS),
+        1.0,
+        1000.0,
+        "frames per second between 1 and 1000",
+    )?;
+    let [f0, f1] = scene.frames.unwrap_or(d::FRAMES);
+    if f0 > f1 {
+        return Err(cx.hint(
+            "scene.frames",
+            format!("the frame range is reversed: [{f0}, {f1}]"),
+            format!("write frames = [{f1}, {f0}]"),
+        ));
+    }
+    if f0 < -1_000_000 || f1 > 1_000_000 || f1 - f0 > 100_000 {
+        return Err(cx.err(
+            "scene.frames",
+            "expected at most 100000 frames within ±1000000",
+        ));
+    }
+    let substeps = cx.range(
+        "scene.substeps",
+        scene.substeps.unwrap_or(d::SUBSTEPS) as f64,
+        1.0,
+        64.0,
+        "a whole number of substeps from 1 to 64",
+    )? as u32;
+    let seed = scene.seed.unwrap_or(d::SEED);
+    if seed < 0 {
+        return Err(cx.err(
+            "scene.seed",
+            format!("expected a whole number of at least 0, found {seed}"),
+        ));
+    }
+
+    // [[swarm]]
+    if raw.swarm.is_empty() {
+        return Err(ShotError {
+            file: file.to_path_buf(),
+            line: 0,
+            column: 0,
+            key: "swarm".to_owned(),
+            message: "the shot has no swarm".to_owned(),
+            source_line: None,
+            hint: Some("add one:\n\n[[swarm]]\ncount = 200".to_owned()),
+        });
+    }
+    let mut swarms = Vec::new();
+    for (i, rs) in raw.swarm.iter().enumerate() {
+        swarms.push(resolve_swarm(&cx, i, rs, base, &swarms)?);
+    }
+    if swarms.iter().map(|s| s.count).sum::<usize>() > 10_000_000 {
+        return Err(cx.err("swarm", "expected at most 10000000 bees in one shot"));
+    }
+
+    let mut obstacles = Vec::new();
+    for (i, ro) in raw.obstacle.iter().enumerate() {
+        obstacles.push(resolve_obstacle(&cx, i, ro)?);
+    }
+    let mut targets = Vec::new();
+    for (i, rt) in raw.target.iter().enumerate() {
+        targets.push(resolve_target(&cx, i, rt, &swarms)?);
+    }
+    let wind = match raw.wind.as_ref().and_then(|w| w.velocity) {
+        Some(v) => cx.vec("wind.velocity", v)?,
+        None => Vec3::ZERO,
+    };
+
+    let ro = raw.output.clone().unwrap_or_default();
+    let dir = ro.dir.clone().unwrap_or_else(|| d::OUTPUT_DIR.to_owned());
+    if dir.trim().is_empty() {
+        return Err(cx.err(
+            "output.dir",
+            "expected a folder path, found an empty string",
+        ));
+    }
+    let mut formats = Vec::new();
+    let names: Vec<String> = ro
+        .formats
+        .clone()
+        .unwrap_or_else(|| d::OUTPUT_FORMATS.iter().map(|s| s.to_string()).collect());
+    for (k, f) in names.iter().enumerate() {
+        let fmt = Format::parse(f).ok_or_else(|| {
+            cx.err(
+                &format!("output.formats[{k}]"),
+                format!("expected one of \"glb\", \"gltf\", \"usda\", \"csv\", found \"{f}\""),
+            )
+        })?;
+        if !formats.contains(&fmt) {
+            formats.push(fmt);
+        }
+    }
+    if formats.is_empty() {
+        return Err(cx.err("output.formats", "expected at least one format"));
+    }
+    let wing_flap_hz = cx.range(
+        "output.wing_flap_hz",
+        ro.wing_flap_hz.unwrap_or(d::WING_FLAP_HZ),
+        0.0,
+        fps / 2.0,
+        "a visible flap rate from 0 (blurred) up to half the frame rate",
+    )?;
+    let clip = ro.usda_clip_frames.unwrap_or(d::USDA_CLIP_FRAMES);
+    let usda_clip_frames = cx.range(
+        "output.usda_clip_frames",
+        clip as f64,
+        0.0,
+        1e6,
+        "a whole number of frames of at least 0 (0 = no clips)",
+    )? as u32;
+
+    let shot = Shot {
+        name,
+        fps,
+        frame_start: f0 as i32,
+        frame_end: f1 as i32,
+        substeps,
+        seed: seed as u64,
+        swarms,
+        obstacles,
+        targets,
+        wind,
+        output: Output {
+            dir: base.join(dir),
+            formats,
+            preview: ro.preview.unwrap_or(false),
+            options: crate::export::OutputOptions {
+                gltf_wing_flap_hz: wing_flap_hz,
+                usda_clip_frames,
+            },
+        },
+    };
+    check_spawn_regions(&cx, &shot)?;
+    Ok(shot)
+}
+
+fn resolve_params(
+    cx: &Ctx,
+    prefix: &str,
+    p: &RawParams,
+    into: &mut BeeParams,
+) -> Result<(), ShotError> {
+    macro_rules! set {
+        ($field:ident, $lo:expr, $hi:expr, $what:expr) => {
+            if let Some(v) = p.$field {
+                into.$field = cx.range(
+                    &format!("{prefix}.{}", stringify!($field)),
+                    v,
+                    $lo,
+                    $hi,
+                    $what,
+                )?;
+            }
+        };
+    }
+    let weight = "a weight from 0 to 100";
+    set!(kappa1, 0.0, 100.0, weight);
+    set!(kappa2, 0.0, 100.0, weight);
+    set!(kappa3, 0.0, 100.0, weight);
+    set!(
+        noise_cell,
+        1e-3,
+        100.0,
+        "a noise cell size from 0.001 to 100 m"
+    );
+    set!(noise_gain, 0.0, 1000.0, "a noise gain from 0 to 1000");
+    set!(
+        neighbour_radius,
+        1e-3,
+        10.0,
+        "a neighbourhood radius from 0.001 to 10 m"
+    );
+    set!(speed, 0.01, 50.0, "a speed from 0.01 to 50 m/s");
+    set!(avoid_distance, 1e-3, 10.0, "a distance from 0.001 to 10 m");
+    set!(fov_deg, 1.0, 180.0, "a half-angle from 1 to 180 degrees");
+    set!(roll_max_deg, 0.0, 90.0, "an angle from 0 to 90 degrees");
+    set!(
+        oscillation_time_unit,
+        1e-4,
+        10.0,
+        "seconds per unit of t, from 0.0001 to 10"
+    );
+    set!(pressure_stiffness, 0.0, 1e6, "a stiffness from 0 to 1e6");
+    set!(collision_stiffness, 0.0, 1e7, "a stiffness from 0 to 1e7");
+    set!(attraction, 0.0, 100.0, "a factor from 0 to 100");
+    set!(containment, 0.0, 1000.0, "an acceleration from 0 to 1000");
+    Ok(())
+}
+
+/// Reads a preset file (`[preset]` header and `[params]`) relative to `base`.
+pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
+    let src = std::fs::read_to_string(path).map_err(|e| ShotError {
+        file: path.to_path_buf(),
+        line: 0,
+        column: 0,
+        key: String::new(),
+        message: format!("cannot read the preset file: {e}"),
+        source_line: None,
+        hint: Some(format!("built-in presets: {}", quoted(&BeeParams::PRESETS))),
+    })?;
+    let cx = Ctx {
+        file: path,
+        loc: Locator::new(&src),
+    };
+    let raw: RawPresetFile = toml::from_str(&src).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        let (line, column, source_line) = cx.loc.line_col(span.start);
+        ShotError {
+            file: path.to_path_buf(),
+            line,
+            column,
+            key: cx.loc.path_at(span.start).unwrap_or_default(),
+            message: friendly(e.message()),
+            source_line: Some(source_line),
+            hint: None,
+        }
+    })?;
+    let base = raw.preset.base.as_deref().unwrap_or(d::PRESET);
+    let mut params = BeeParams::preset(base).ok_or_else(|| {
+        cx.err(
+            "preset.base",
+            format!(
+                "expected one of {}, found \"{base}\"",
+                quoted(&BeeParams::PRESETS)
+            ),
+        )
+    })?;
+    if let Some(p) = &raw.params {
+        resolve_params(&cx, "params", p, &mut params)?;
+    }
+    Ok(params)
+}
+
+fn resolve_swarm(
+    cx: &Ctx,
+    i: usize,
+    rs: &RawSwarm,
+    base: &Path,
+    earlier: &[Swarm],
+) -> Result<Swarm, ShotError> {
+    let k = |key: &str| format!("swarm[{i}].{key}");
+    let name = rs.name.clone().unwrap_or_else(|| {
+        if i == 0 {
+            d::SWARM_NAME.to_owned()
+        } else {
+            format!("{}_{}", d::SWARM_NAME, i + 1)
+        }
+    });
+    if !is_identifier(&name) {
+        return Err(cx.hint(&k("name"), format!("expected a name of letters, digits and _ not starting with a digit, found \"{name}\""), "swarm names become node and prim names in the caches"));
+    }
+    if earlier.iter().any(|s| s.name == name) {
+        return Err(cx.err(
+            &k("name"),
+            format!("a swarm named \"{name}\" already exists"),
+        ));
+    }
+    let count = cx
+        .required(
+            &k("count"),
+            &rs.count,
+            "the number of bees, e.g. count = 200",
+        )
+        .map_err(|mut e| {
+            if e.line == 0 || e.key != k("count") {
+                e.key = k("count");
+            }
+            e
+        })?;
+    if count < 1 {
+        return Err(cx.hint(
+            &k("count"),
+            format!("expected at least 1 bee, found {count}"),
+            "remove the swarm instead of giving it no bees",
+        ));
+    }
+    let model = match cx.one_of(
+        &k("model"),
+        rs.model.as_deref().unwrap_or(d::MODEL),
+        &["bee", "brownian", "boids"],
+    )? {
+        "bee" => ModelKind::Bee,
+        "brownian" => ModelKind::Brownian,
+        _ => ModelKind::Boids,
+    };
+    let preset = rs.preset.clone().unwrap_or_else(|| d::PRESET.to_owned());
+    let mut params = match BeeParams::preset(&preset) {
+        Some(p) => p,
+        None if preset.ends_with(".toml") => {
+            load_preset_file(&base.join(&preset)).map_err(|e| {
+                let mut outer = cx.err(
+                    &k("preset"),
+                    format!("cannot use preset file \"{preset}\": {}", e.message),
+                );
+                outer.hint = Some(e.to_string());
+                outer
+            })?
+        }
+        None => {
+            return Err(cx.hint(
+                &k("preset"),
+                format!(
+                    "expected one of {} or a preset file ending in .toml, found \"{preset}\"",
+                    quoted(&BeeParams::PRESETS)
+                ),
+                "beeswarm calibrate writes preset files",
+            ));
+        }
+    };
+    if let Some(p) = &rs.params {
+        resolve_params(cx, &k("params"), p, &mut params)?;
+    }
+
+    let rsp = rs.spawn.clone().unwrap_or_default();
+    let center = cx.vec(&k("spawn.center"), rsp.center.unwrap_or(d::SPAWN_CENTER))?;
+    let spawn = match cx.one_of(
+        &k("spawn.shape"),
+        rsp.shape.as_deref().unwrap_or("box"),
+        &["box", "sphere"],
+    )? {
+        "box" => Region::Box {
+            center,
+            half: cx.size(&k("spawn.size"), rsp.size.unwrap_or(d::SPAWN_SIZE))? * 0.5,
+        },
+        _ => Region::Sphere {
+            center,
+            radius: cx.positive(
+                &k("spawn.radius"),
+                cx.required(
+                    &k("spawn.radius"),
+                    &rsp.radius,
+                    "the sphere's radius in metres",
+                )?,
+            )? as f32,
+        },
+    };
+
+    let rv = rs.variation.clone().unwrap_or_default();
+    let variation = Variation {
+        size: cx.range(
+            &k("variation.size"),
+            rv.size.unwrap_or(d::VARIATION_SIZE),
+            0.0,
+            0.9,
+            "a fraction from 0 to 0.9",
+        )? as f32,
+        speed: cx.range(
+            &k("variation.speed"),
+            rv.speed.unwrap_or(d::VARIATION_SPEED),
+            0.0,
+            0.9,
+            "a fraction from 0 to 0.9",
+        )? as f32,
+        phase: cx.range(
+            &k("variation.phase"),
+            rv.phase.unwrap_or(d::VARIATION_PHASE),
+            0.0,
+            1.0,
+            "a fraction of a cycle from 0 to 1",
+        )? as f32,
+    };
+
+    let rb = rs.bee.clone().unwrap_or_default();
+    let bee = BeeBody {
+        length: cx.range(
+            &k("bee.length"),
+            rb.length.unwrap_or(d::BEE_LENGTH),
+            1e-4,
+            1.0,
+            "a body length from 0.0001 to 1 m",
+        )? as f32,
+        radius: cx.range(
+            &k("bee.radius"),
+            rb.radius.unwrap_or(d::BEE_RADIUS),
+            1e-5,
+            0.5,
+            "a body radius from 0.00001 to 0.5 m",
+        )? as f32,
+        mass: cx.range(
+            &k("bee.mass"),
+            rb.mass.unwrap_or(d::BEE_MASS),
+            1e-7,
+            10.0,
+            "a mass from 1e-7 to 10 kg",
+        )? as f32,
+        wing_area: cx.range(
+            &k("bee.wing_area"),
+            rb.wing_area.unwrap_or(d::BEE_WING_AREA),
+            1e-8,
+            1.0,
+            "a wing area from 1e-8 to 1 m²",
+        )? as f32,
+        wing_beat_hz: cx.range(
+            &k("bee.wing_beat_hz"),
+            rb.wing_beat_hz.unwrap_or(d::BEE_WING_BEAT_HZ),
+            0.0,
+            2000.0,
+            "a frequency from 0 to 2000 Hz",
+        )? as f32,
+    };
+
+    let bounds = match &rs.bounds {
+        Some(b) => {
+            let c = cx.vec(
+                &k("bounds.center"),
+                b.center.unwrap_or(rsp.center.unwrap_or(d::SPAWN_CENTER)),
+            )?;
+            let s = cx.size(
+                &k("bounds.size"),
+                cx.required(
+                    &k("bounds.size"),
+                    &b.size,
+                    "the box size [x, y, z] in metres",
+                )?,
+            )?;
+            Some((c, s * 0.5))
+        }
+        None => Some((
+            spawn.center(),
+            spawn.half_extents() + Vec3::splat(d::BOUNDS_MARGIN as f32),
+        )),
+    };
+
+    Ok(Swarm {
+        name,
+        count: count as usize,
+        model,
+        preset,
+        params,
+        spawn,
+        variation,
+        bee,
+        bounds,
+    })
+}
+
+fn euler_deg(v: Vec3) -> Quat {
+    let r = v * (std::f32::consts::PI / 180.0);
+    // X first, then Y, then Z, about world axes.
+    Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x)
+}
+
+fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, ShotError> {
+    let k = |key: &str| format!("obstacle[{i}].{key}");
+    let kind = cx.required(
+        &k("type"),
+        &ro.kind,
+        "the obstacle type: \"sphere\", \"box\", \"capsule\", \"cylinder\" or \"plane\"",
+    )?;
+    let kind = cx.one_of(
+        &k("type"),
+        &kind,
+        &["sphere", "box", "capsule", "shaft", "cylinder", "plane"],
+    )?;
+    let name = ro
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{kind}_{}", i + 1));
+    let center = || {
+        cx.vec(
+            &k("center"),
+            cx.required(&k("center"), &ro.center, "the centre [x, y, z] in metres")?,
+        )
+    };
+    let radius = || {
+        cx.positive(
+            &k("radius"),
+            cx.required(&k("radius"), &ro.radius, "the radius in metres")?,
+        )
+        .map(|r| r as f32)
+    };
+    let rotation = || -> Result<Quat, ShotError> {
+        Ok(euler_deg(
+            cx.vec(&k("rotation"), ro.rotation.unwrap_or([0.0; 3]))?,
+        ))
+    };
+    // Keys that belong to other shapes are mistakes worth reporting.
+    let allowed: &[&str] = match kind {
+        "sphere" => &["center", "radius"],
+        "box" => &["center", "size", "rotation"],
+        "capsule" | "shaft" => &["a", "b", "radius"],
+        "cylinder" => &["center", "radius", "height", "rotation"],
+        _ => &["point", "normal"],
+    };
+    let present = [
+        ("center", ro.center.is_some()),
+        ("radius", ro.radius.is_some()),
+        ("size", ro.size.is_some()),
+        ("height", ro.height.is_some()),
+        ("rotation", ro.rotation.is_some()),
+        ("a", ro.a.is_some()),
+        ("b", ro.b.is_some()),
+        ("point", ro.point.is_some()),
+        ("normal", ro.normal.is_some()),
+    ];
+    if let Some((key, _)) = present.iter().find(|(key, p)| *p && !allowed.contains(key)) {
+        return Err(cx.hint(
+            &k(key),
+            format!("a {kind} has no `{key}`"),
+            format!("a {kind} takes {}", allowed.join(", ")),
+        ));
+    }
+    let shape = match kind {
+        "sphere" => Shape::Sphere {
+            center: center()?,
+            radius: radius()?,
+        },
+        "box" => Shape::Box {
+            center: center()?,
+            half: cx.size(
+                &k("size"),
+                cx.required(&k("size"), &ro.size, "the box size [x, y, z] in metres")?,
+            )? * 0.5,
+            rotation: rotation()?,
+        },
+        "capsule" | "shaft" => {
+            let a = cx.vec(
+                &k("a"),
+                cx.required(&k("a"), &ro.a, "the first end point [x, y, z]")?,
+            )?;
+            let b = cx.vec(
+                &k("b"),
+                cx.required(&k("b"), &ro.b, "the second end point [x, y, z]")?,
+            )?;
+            Shape::Capsule {
+                a,
+                b,
+                radius: radius()?,
+            }
+        }
+        "cylinder" => Shape::Cylinder {
+            center: center()?,
+            radius: radius()?,
+            half_height: cx.positive(
+                &k("height"),
+                cx.required(&k("height"), &ro.height, "the height in metres")?,
+            )? as f32
+                * 0.5,
+            rotation: rotation()?,
+        },
+        _ => {
+            let point = cx.vec(&k("point"), ro.point.unwrap_or([0.0; 3]))?;
+            let n = cx.vec(&k("normal"), ro.normal.unwrap_or([0.0, 1.0, 0.0]))?;
+            if n.length() < 1e-6 {
+                return Err(cx.err(&k("normal"), "expected a non-zero normal vector"));
+            }
+            Shape::Plane {
+                point,
+                normal: n.normalize(),
+            }
+        }
+    };
+    Ok(Obstacle { name, shape })
+}
+
+fn resolve_target(
+    cx: &Ctx,
+    i: usize,
+    rt: &RawTarget,
+    swarms: &[Swarm],
+) -> Result<Target, ShotError> {
+    let k = |key: &str| format!("target[{i}].{key}");
+    let kind_name = rt.kind.clone().unwrap_or_else(|| "attractor".to_owned());
+    let (kind, (radius, strength)) =
+        match cx.one_of(&k("type"), &kind_name, &["nest", "flower", "attractor"])? {
+            "nest" => (TargetKind::Nest, d::NEST),
+            "flower" => (TargetKind::Flower, d::FLOWER),
+            _ => (TargetKind::Attractor, d::ATTRACTOR),
+        };
+    let name = rt
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{kind_name}_{}", i + 1));
+    let mut keys = Vec::new();
+    if let Some(raw_keys) = &rt.keys {
+        for (j, key) in raw_keys.iter().enumerate() {
+            let f = cx.required(
+                &k(&format!("keys[{j}].frame")),
+                &key.frame,
+                "the key's frame number",
+            )?;
+            let p = cx.vec(
+                &k(&format!("keys[{j}].position")),
+                cx.required(
+                    &k(&format!("keys[{j}].position")),
+                    &key.position,
+                    "the key's position [x, y, z]",
+                )?,
+            )?;
+            if let Some(&(prev, _)) = keys.last() {
+                if f <= prev {
+                    return Err(cx.err(
+                        &k(&format!("keys[{j}].frame")),
+                        format!("expected key frames in increasing order, found {f} after {prev}"),
+                    ));
+                }
+            }
+            keys.push((f, p));
+        }
+    }
+    match (rt.position, keys.is_empty()) {
+        (Some(p), true) => keys.push((0.0, cx.vec(&k("position"), p)?)),
+        (Some(_), false) => {
+            return Err(cx.hint(
+                &k("position"),
+                "a target has either `position` or `keys`, not both",
+                "keys = [{ frame = 1, position = [0, 1, 0] }, ...] moves it",
+            ));
+        }
+        (None, true) => {
+            return Err(cx.err(
+                &k("position"),
+                "missing key `position`: expected the target's position [x, y, z] (or `keys`)",
+            ));
+        }
+        (None, false) => {}
+    }
+    let radius = cx.positive(&k("radius"), rt.radius.unwrap_or(radius))? as f32;
+    let strength = cx.non_negative(&k("strength"), rt.strength.unwrap_or(strength))? as f32;
+    let reach = match rt.reach {
+        Some(r) => cx.positive(&k("reach"), r)? as f32,
+        None => f32::INFINITY,
+    };
+    let swarm_ids = match &rt.swarms {
+        None => (0..swarms.len()).collect(),
+        Some(names) => names
+            .iter()
+            .enumerate()
+            .map(|(j, n)| {
+                swarms.iter().position(|s| &s.name == n).ok_or_else(|| {
+                    let known: Vec<&str> = swarms.iter().map(|s| s.name.as_str()).collect();
+                    cx.err(
+                        &k(&format!("swarms[{j}]")),
+                        format!("no swarm named \"{n}\"; the shot has {}", quoted(&known)),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    Ok(Target {
+        name,
+        kind,
+        keys,
+        radius,
+        strength,
+        reach,
+        swarms: swarm_ids,
+    })
+}
+
+/// A spawn region that lies wholly inside obstacles would trap every bee.
+fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
+    for (i, s) in shot.swarms.iter().enumerate() {
+        let c = s.spawn.center();
+        let h = s.spawn.half_extents();
+        let n = 4;
+        let mut all_inside = true;
+        'grid: for a in 0..=n {
+            for b in 0..=n {
+                for e in 0..=n {
+                    let f = Vec3::new(a as f32, b as f32, e as f32) / n as f32 * 2.0 - Vec3::ONE;
+                    if let Region::Sphere { .. } = s.spawn {
+                        if f.length() > 1.0 {
+                            continue;
+                        }
+                    }
+                    let p = c + f * h;
+                    if !shot
+                        .obstacles
+                        .iter()
+                        .any(|o| crate::sim::obstacle::signed_distance(&o.shape, p) < 0.0)
+                    {
+                        all_inside = false;
+                        break 'grid;
+                    }
+                }
+            }
+        }
+        if all_inside && !shot.obstacles.is_empty() {
+            return Err(cx.hint(
+                &format!("swarm[{i}].spawn"),
+                "the spawn region lies entirely inside obstacles",
+                "move the spawn centre out of the obstacle or make the region larger",
+            ));
+        }
+    }
+    Ok(())
+}
