@@ -1,0 +1,325 @@
+"""The bake operator: scene or shot file → `beeswarm bake` subprocess → import.
+
+Interactive: a modal operator with a timer drains the reader thread's queue, drives the
+window manager's progress and the status bar; Esc kills the bake (the binary writes its
+outputs atomically, so the previous cache stays) and imports nothing. In background mode
+(`blender -b`, a farm, the tests) and when called from a script (EXEC_DEFAULT) it runs to
+completion synchronously.
+"""
+import os
+import pathlib
+import tempfile
+import time
+
+import bpy
+from bpy.props import EnumProperty, StringProperty
+
+from . import binary, importer, motion, props, runner, shot_builder
+
+_active = {"job": None}  # one bake at a time
+
+FORMAT_FILES = {"USD": ("usda", ".usda"), "GLTF": ("glb", ".glb")}
+
+
+class BakeError(Exception):
+    pass
+
+
+def _blend_dir():
+    path = bpy.data.filepath
+    return pathlib.Path(path).parent if path else None
+
+
+def _temp_dir():
+    d = pathlib.Path(tempfile.gettempdir()) / "beeswarm"
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def cache_dir(settings, shot_name):
+    raw = settings.cache_dir or "//beeswarm_cache/"
+    if raw.startswith("//") and not bpy.data.filepath:
+        base = _temp_dir() / "cache"
+    else:
+        base = pathlib.Path(bpy.path.abspath(raw))
+    return base / shot_name
+
+
+class Job:
+    """Everything one bake needs, prepared before the subprocess starts."""
+
+    def __init__(self, context, op):
+        scene = context.scene
+        self.settings = scene.beeswarm
+        self.format = op.format
+        self.warnings = []
+        bin_path, msg = binary.resolve(op.binary_path or props.preference_binary(context))
+        if bin_path is None:
+            raise BakeError(msg)
+        self.binary = bin_path
+        if op.shot_path:
+            shot = pathlib.Path(bpy.path.abspath(op.shot_path))
+            if not shot.is_file():
+                raise BakeError(f"No shot file at {shot}")
+            try:
+                self.name, self.fps, self.frames = importer.shot_info(str(shot))
+            except (OSError, ValueError) as e:  # tomllib.TOMLDecodeError is a ValueError
+                # The binary reports it with line and column; let it speak.
+                self.name, self.fps, self.frames = shot.stem, None, None
+                self.info_error = str(e)
+            self.shot_path = shot
+        else:
+            try:
+                shot, self.warnings = shot_builder.build_shot(scene, self.settings)
+            except shot_builder.ShotBuildError as e:
+                raise BakeError(str(e)) from None
+            self.name = shot["scene"]["name"]
+            self.fps = shot["scene"]["fps"]
+            self.frames = tuple(shot["scene"]["frames"])
+            folder = _blend_dir() or _temp_dir()
+            self.shot_path = folder / f"{self.name}.shot.toml"
+            source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
+            text = shot_builder.shot_toml(shot, source)
+            tmp = self.shot_path.with_name(self.shot_path.name + ".tmp")
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, self.shot_path)
+        self.out_dir = cache_dir(self.settings, self.name)
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        fmt, _ = FORMAT_FILES[self.format]
+        self.argv = runner.bake_argv(self.binary, self.shot_path, self.out_dir, [fmt, "csv"])
+        self.process = None
+        self.started = None
+
+    def start(self):
+        self.started = time.monotonic()
+        try:
+            self.process = runner.BakeProcess(self.argv, cwd=str(self.shot_path.parent))
+        except OSError as e:
+            raise BakeError(f"Cannot run {self.binary}: {e}") from None
+
+    def outputs(self):
+        """(cache path, tracks CSV path) from the `done` event, else the expected names."""
+        ext = FORMAT_FILES[self.format][1]
+        outs = [pathlib.Path(p) for p in (self.process.outputs or [])]
+        cache = next((p for p in outs if p.suffix in (ext, ".gltf")), None)
+        csv = next((p for p in outs if p.name.endswith(".tracks.csv")), None)
+        cache = cache or self.out_dir / f"{self.name}{ext}"
+        csv = csv or self.out_dir / f"{self.name}.tracks.csv"
+        return cache, csv
+
+    def finish(self, context):
+        """After exit 0: import. Returns the collection."""
+        cache, csv = self.outputs()
+        if not cache.is_file():
+            raise BakeError(f"beeswarm reported success but wrote no {cache.name}")
+        name = cache.name[: -len(cache.suffix)]
+        fps, frames = self.fps, self.frames
+        if fps is None or frames is None:
+            _, fps, frames = importer.shot_info(str(self.shot_path))
+
+        def after(collection, objects):
+            return motion.attach(context, name, self.format, objects, csv, frames, collection)
+
+        try:
+            return importer.import_cache(context, name, str(cache), self.format, fps, frames,
+                                         after=after)
+        except Exception as e:
+            raise BakeError(f"Import of {cache.name} failed: {e}") from e
+
+    def failure(self):
+        return runner.error_message(self.process.stderr, self.process.returncode)
+
+
+class BEESWARM_OT_bake(bpy.types.Operator):
+    """Bake the swarm with the beeswarm binary and import the cache (Esc cancels)"""
+
+    bl_idname = "beeswarm.bake"
+    bl_label = "Bake Swarm"
+    bl_options = {"REGISTER"}
+
+    shot_path: StringProperty(name="Shot File", subtype="FILE_PATH", default="",
+                              description="Shot to bake; empty = build the shot from the scene")
+    format: EnumProperty(name="Format", items=props.FORMATS, default="USD")
+    binary_path: StringProperty(name="Binary", subtype="FILE_PATH", default="",
+                                description="beeswarm binary; empty = the add-on's preference")
+
+    _timer = None
+    _job = None
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and _active["job"] is None
+
+    # -- synchronous (background, scripts) ------------------------------------------------
+    def execute(self, context):
+        job = self._prepare(context)
+        if job is None:
+            return {"CANCELLED"}
+        _active["job"] = job
+        try:
+            job.process_start_ok = self._start(job)
+            if not job.process_start_ok:
+                return {"CANCELLED"}
+            last = 0.0
+            while True:
+                ev = job.process.wait_event(timeout=0.5)
+                if ev is None:
+                    continue
+                kind, payload = ev
+                if kind == "progress" and time.monotonic() - last > 2.0 and bpy.app.background:
+                    last = time.monotonic()
+                    print(f"beeswarm: frame {payload.get('frame')} / {payload.get('total')}",
+                          flush=True)
+                if kind == "exit":
+                    break
+            return self._complete(context, job)
+        finally:
+            _active["job"] = None
+
+    # -- interactive ------------------------------------------------------------------------
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        job = self._prepare(context)
+        if job is None or not self._start(job):
+            return {"CANCELLED"}
+        _active["job"] = job
+        self._job = job
+        wm = context.window_manager
+        wm.progress_begin(0, 100)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context, f"Baking {job.name}… (Esc to cancel)")
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        job = self._job
+        if event.type == "ESC" and event.value == "PRESS":
+            job.process.cancel()
+            self._end_modal(context)
+            msg = f"Bake of {job.name} cancelled; the previous cache is unchanged"
+            context.scene.beeswarm.last_message = msg
+            self.report({"WARNING"}, msg)
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        exited = False
+        for kind, payload in job.process.poll():
+            if kind == "progress":
+                frac = runner.fraction(payload)
+                context.window_manager.progress_update(frac * 100.0)
+                self._status(context, f"Baking {job.name}: frame {payload.get('frame')} of "
+                                      f"{payload.get('total')}, {payload.get('elapsed_s', 0):.1f} s "
+                                      f"(Esc to cancel)")
+            elif kind == "exit":
+                exited = True
+        if not exited:
+            return {"RUNNING_MODAL"}
+        self._end_modal(context)
+        return self._complete(context, job)
+
+    def cancel(self, context):  # Blender closing the window mid-bake
+        if self._job is not None and self._job.process is not None:
+            self._job.process.cancel()
+        self._end_modal(context)
+
+    # -- shared -------------------------------------------------------------------------------
+    def _prepare(self, context):
+        try:
+            job = Job(context, self)
+        except BakeError as e:
+            self._fail(context, str(e))
+            return None
+        except OSError as e:
+            self._fail(context, f"Cannot write the shot: {e}")
+            return None
+        for w in job.warnings:
+            self.report({"WARNING"}, w)
+        return job
+
+    def _start(self, job):
+        try:
+            job.start()
+        except BakeError as e:
+            self._fail(bpy.context, str(e))
+            return False
+        return True
+
+    def _complete(self, context, job):
+        rc = job.process.returncode
+        if rc != 0:
+            self._fail(context, f"Bake failed: {job.failure()}")
+            return {"CANCELLED"}
+        try:
+            coll = job.finish(context)
+        except BakeError as e:
+            self._fail(context, str(e))
+            return {"CANCELLED"}
+        secs = time.monotonic() - job.started
+        msg = f"Baked {coll.name} in {secs:.1f} s → {job.outputs()[0]}"
+        context.scene.beeswarm.last_message = msg
+        self.report({"INFO"}, msg)
+        return {"FINISHED"}
+
+    def _fail(self, context, msg):
+        try:
+            context.scene.beeswarm.last_message = "Error: " + msg.splitlines()[0]
+        except Exception:
+            pass
+        self.report({"ERROR"}, msg)
+
+    def _status(self, context, text):
+        try:
+            context.workspace.status_text_set(text)
+        except Exception:
+            pass
+
+    def _end_modal(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+            wm.progress_end()
+        self._status(context, None)
+        _active["job"] = None
+
+
+class BEESWARM_OT_write_shot(bpy.types.Operator):
+    """Write the shot built from the scene to a TOML file, without baking"""
+
+    bl_idname = "beeswarm.write_shot"
+    bl_label = "Write Shot File"
+
+    filepath: StringProperty(subtype="FILE_PATH", default="")
+
+    def execute(self, context):
+        try:
+            shot, warnings = shot_builder.build_shot(context.scene, context.scene.beeswarm)
+        except shot_builder.ShotBuildError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        for w in warnings:
+            self.report({"WARNING"}, w)
+        path = self.filepath or str((_blend_dir() or _temp_dir())
+                                    / f"{shot['scene']['name']}.shot.toml")
+        path = bpy.path.abspath(path)
+        pathlib.Path(path).write_text(shot_builder.shot_toml(shot), encoding="utf-8")
+        self.report({"INFO"}, f"Wrote {path}")
+        return {"FINISHED"}
+
+
+classes = (BEESWARM_OT_bake, BEESWARM_OT_write_shot)
+
+
+def register():
+    for c in classes:
+        bpy.utils.register_class(c)
+
+
+def unregister():
+    for job in [_active["job"]]:
+        if job is not None and job.process is not None:
+            job.process.cancel()
+    _active["job"] = None
+    for c in reversed(classes):
+        bpy.utils.unregister_class(c)

@@ -1,0 +1,103 @@
+"""A small TOML writer for shot files (Blender's Python has tomllib to read, nothing to write).
+
+Values: str, bool, int, float, lists of those, and dicts written as inline tables inside
+lists or as `[section]` / `[[array]]` tables at the top level.
+"""
+import math
+
+
+def _key(k):
+    if k and all(c.isalnum() or c in "_-" for c in k):
+        return k
+    return _string(k)
+
+
+def _string(s):
+    out = ['"']
+    for ch in s:
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif ch == "\n":
+            out.append("\\n")
+        elif ch == "\t":
+            out.append("\\t")
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append("\\u%04x" % ord(ch))
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _float(x):
+    if not math.isfinite(x):
+        raise ValueError(f"cannot write a non-finite number ({x}) to a shot file")
+    x = float(x)
+    if x == 0.0:
+        return "0.0"
+    text = repr(round(x, 9))  # metres: a nanometre is plenty, and keeps the file readable
+    if "e" not in text and "." not in text and "inf" not in text:
+        text += ".0"
+    return text
+
+
+def value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return _float(v)
+    if isinstance(v, str):
+        return _string(v)
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {value(x)}" for k, x in v.items()) + " }" if v else "{}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(value(x) for x in v) + "]"
+    # mathutils vectors and other sequences
+    if hasattr(v, "__len__") and hasattr(v, "__getitem__"):
+        return value([float(x) for x in v])
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _table_body(d, lines):
+    for k, v in d.items():
+        if v is None:
+            continue
+        lines.append(f"{_key(k)} = {value(v)}")
+
+
+def dumps(doc, header=None):
+    """doc: {section: dict | list[dict]}; scalar top-level keys are written first."""
+    lines = []
+    if header:
+        lines.extend("# " + line if line else "#" for line in header.splitlines())
+        lines.append("")
+    scalars = {k: v for k, v in doc.items() if not isinstance(v, (dict, list)) or
+               (isinstance(v, list) and not all(isinstance(x, dict) for x in v)) or v == []}
+    _table_body({k: v for k, v in scalars.items() if v != []}, lines)
+    for k, v in doc.items():
+        if k in scalars:
+            continue
+        if isinstance(v, dict):
+            sub = {sk: sv for sk, sv in v.items() if isinstance(sv, dict) and sv}
+            lines.append(f"[{_key(k)}]")
+            _table_body({sk: sv for sk, sv in v.items() if sk not in sub}, lines)
+            lines.append("")
+            for sk, sv in sub.items():
+                lines.append(f"[{_key(k)}.{_key(sk)}]")
+                _table_body(sv, lines)
+                lines.append("")
+        else:
+            for item in v:
+                sub = {sk: sv for sk, sv in item.items() if isinstance(sv, dict) and sk == "params" and sv}
+                lines.append(f"[[{_key(k)}]]")
+                _table_body({sk: sv for sk, sv in item.items() if sk not in sub}, lines)
+                lines.append("")
+                for sk, sv in sub.items():
+                    lines.append(f"[{_key(k)}.{_key(sk)}]")
+                    _table_body(sv, lines)
+                    lines.append("")
+    return "\n".join(lines).rstrip() + "\n"
