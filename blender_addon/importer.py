@@ -117,6 +117,34 @@ def _find_layer_collection(layer_coll, coll):
     return None
 
 
+def _fcurves(action):
+    """Every F-curve of an action: layered actions (4.4+, the only kind in 5.0) or legacy."""
+    layers = getattr(action, "layers", None)
+    if layers is not None and len(layers):
+        for layer in layers:
+            for strip in layer.strips:
+                for bag in getattr(strip, "channelbags", []):
+                    yield from bag.fcurves
+    elif hasattr(action, "fcurves"):
+        yield from action.fcurves
+
+
+def align_gltf_time(actions, fps, frame_start):
+    """glTF time 0 is the shot's first frame, but Blender's glTF importer puts time t at
+    frame t·fps·fps_base (from frame 0, and with fps_base multiplied, not divided). Moves
+    every imported key to frame_start + t·fps."""
+    scene = bpy.context.scene
+    imported_rate = scene.render.fps * scene.render.fps_base
+    k = fps / imported_rate
+    for action in actions:
+        for fc in _fcurves(action):
+            for kp in fc.keyframe_points:
+                for attr in ("co", "handle_left", "handle_right"):
+                    v = getattr(kp, attr)
+                    v.x = v.x * k + frame_start
+            fc.update()
+
+
 def _import_file(path, fmt):
     if fmt == "USD":
         result = bpy.ops.wm.usd_import(
@@ -196,6 +224,8 @@ def import_cache(context, shot_name, path, fmt, fps, frames, after=None):
         if not imported_objects:
             raise ImportFailed(f"{os.path.basename(path)} holds nothing to import")
         _adopt_stray_collections(staging, new, view_layer)
+        if fmt != "USD":
+            align_gltf_time([i for i in new if isinstance(i, bpy.types.Action)], fps, frames[0])
         if after is not None:
             after(staging, imported_objects)
         for id_ in _new_ids(before):

@@ -168,8 +168,8 @@ class BEESWARM_OT_bake(bpy.types.Operator):
                 kind, payload = ev
                 if kind == "progress" and time.monotonic() - last > 2.0 and bpy.app.background:
                     last = time.monotonic()
-                    print(f"beeswarm: frame {payload.get('frame')} / {payload.get('total')}",
-                          flush=True)
+                    print(f"beeswarm: frame {payload.get('frame')} "
+                          f"({payload.get('done', '?')}/{payload.get('total')})", flush=True)
                 if kind == "exit":
                     break
             return self._complete(context, job)
@@ -208,9 +208,9 @@ class BEESWARM_OT_bake(bpy.types.Operator):
             if kind == "progress":
                 frac = runner.fraction(payload)
                 context.window_manager.progress_update(frac * 100.0)
-                self._status(context, f"Baking {job.name}: frame {payload.get('frame')} of "
-                                      f"{payload.get('total')}, {payload.get('elapsed_s', 0):.1f} s "
-                                      f"(Esc to cancel)")
+                self._status(context, f"Baking {job.name}: frame {payload.get('frame')} "
+                                      f"({payload.get('done', '?')}/{payload.get('total')}), "
+                                      f"{payload.get('elapsed_s', 0):.1f} s (Esc to cancel)")
             elif kind == "exit":
                 exited = True
         if not exited:

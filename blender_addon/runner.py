@@ -160,16 +160,13 @@ def error_message(stderr, returncode, limit=600):
     return text
 
 
-def fraction(event, frame_start=None, frame_end=None):
-    """0..1 from a progress event. `frame` is a frame number of the shot's range when the
-    range is known, else a count of frames done out of `total`."""
+def fraction(event):
+    """0..1 from a progress event: `done` frames of `total` (`frame` is the frame number;
+    older builds sent only `frame`, counted from 1)."""
     total = event.get("total") or 0
-    frame = event.get("frame") or 0
-    if frame_start is not None and frame_end is not None and frame_end >= frame_start:
-        if frame_start <= frame <= frame_end and (frame_start != 1 or total != frame_end - frame_start + 1):
-            return (frame - frame_start + 1) / (frame_end - frame_start + 1)
+    done = event.get("done", event.get("frame", 0)) or 0
     if total > 0:
-        return max(0.0, min(1.0, frame / total))
+        return max(0.0, min(1.0, done / total))
     return 0.0
 
 

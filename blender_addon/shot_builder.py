@@ -120,7 +120,7 @@ def guess_mesh_shape(points, tol=0.02):
             and all(abs(abs(p.z - c.z) - h.z) <= eps for p in points)):
         return "cylinder"
     radii = [(p - c).length for p in points]
-    if max(radii) - min(radii) <= eps and max(h) - min(h) <= eps:
+    if max(radii) - min(radii) <= eps and min(h) >= 0.7 * max(h):
         return "sphere"
     return None
 

@@ -1,0 +1,464 @@
+"""The Blender add-on (blender_addon/), headless with `bpy` (Blender as a Python module).
+
+Run with the venv that has bpy 5.0.1:
+    BEESWARM_BIN=target/release/beeswarm python -m pytest tests/python/test_blender_addon.py
+"""
+import math
+import os
+import pathlib
+import stat
+import subprocess
+import sys
+import time
+import tomllib
+
+import pytest
+
+bpy = pytest.importorskip("bpy", reason="bpy (Blender as a module) is not installed")
+import numpy as np  # noqa: E402  (bpy brings numpy)
+from mathutils import Euler, Matrix, Vector  # noqa: E402
+
+from conftest import ROOT, _missing, read_tracks  # noqa: E402
+
+sys.path.insert(0, str(ROOT))
+import blender_addon  # noqa: E402
+from blender_addon import binary, importer, runner, shot_builder  # noqa: E402
+
+TOL = 1e-4  # metres
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    blender_addon.register()
+    yield blender_addon
+    blender_addon.unregister()
+
+
+@pytest.fixture
+def scene(tmp_path):
+    """An empty scene with Obstacles and Targets collections, saved in tmp_path (so the
+    shot TOML and the cache go there, not to a shared temporary folder)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps, sc.render.fps_base = 24, 1.0
+    sc.frame_start, sc.frame_end = 1, 36
+    for name in ("Obstacles", "Targets"):
+        sc.collection.children.link(bpy.data.collections.new(name))
+    s = sc.beeswarm
+    s.obstacles = bpy.data.collections["Obstacles"]
+    s.targets = bpy.data.collections["Targets"]
+    s.shot_name = "bltest"
+    s.count = 40
+    s.seed = 1
+    s.spawn_center = (0.0, 0.0, 1.0)
+    s.spawn_size = (0.8, 0.8, 0.8)
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
+    return sc
+
+
+def add_primitive(kind, collection, **kw):
+    op = {"cylinder": bpy.ops.mesh.primitive_cylinder_add, "cube": bpy.ops.mesh.primitive_cube_add,
+          "uv_sphere": bpy.ops.mesh.primitive_uv_sphere_add,
+          "ico_sphere": bpy.ops.mesh.primitive_ico_sphere_add,
+          "plane": bpy.ops.mesh.primitive_plane_add}[kind]
+    op(**kw)
+    obj = bpy.context.active_object
+    for c in list(obj.users_collection):
+        c.objects.unlink(obj)
+    bpy.data.collections[collection].objects.link(obj)
+    return obj
+
+
+def add_empty(name, location, collection="Targets", **props):
+    e = bpy.data.objects.new(name, None)
+    e.location = location
+    for k, v in props.items():
+        e[k] = v
+    bpy.data.collections[collection].objects.link(e)
+    return e
+
+
+def shot_cylinder_scene(sc):
+    """A nest and a tilted cylinder through the spawn region."""
+    add_empty("Nest", (0.0, 0.3, 1.1))
+    cyl = add_primitive("cylinder", "Obstacles", radius=0.08, depth=1.6, location=(0.15, 0.0, 1.0),
+                        rotation=(math.radians(20), 0.0, math.radians(35)))
+    cyl.name = "post"
+    return cyl
+
+
+def bake(fmt="USD", binary_path=None, **kw):
+    return bpy.ops.beeswarm.bake(format=fmt, binary_path=binary_path or "", **kw)
+
+
+def run_bake(beeswarm_bin, fmt="USD", **kw):
+    """Bakes; a build whose writer for `fmt` has not landed skips (fails under
+    BEESWARM_REQUIRE_TOOLS=1)."""
+    try:
+        return bake(fmt, beeswarm_bin, **kw)
+    except RuntimeError as e:
+        if "not available in this build" in str(e):
+            _missing(f"the {fmt} writer in {beeswarm_bin}")
+        raise
+
+
+def shot_collections(name):
+    return [c for c in bpy.data.collections if c.get(importer.SHOT_TAG) == name
+            and c.name.startswith(name) and c.name in bpy.context.scene.collection.children]
+
+
+def blender_from_shot(p):
+    return Vector((p[0], -p[2], p[1]))
+
+
+# ---------------------------------------------------------------------------------------
+# Shot building (no binary needed)
+
+def shot_points_on_cylinder(entry, points):
+    """Max deviation of shot-space points from the shot cylinder's side or caps."""
+    rot = Euler([math.radians(a) for a in entry["rotation"]], "XYZ").to_matrix()
+    axis = rot @ Vector((0, 1, 0))
+    c = Vector(entry["center"])
+    worst = 0.0
+    for p in points:
+        d = Vector(p) - c
+        along = d.dot(axis)
+        radial = (d - along * axis).length
+        on_side = abs(radial - entry["radius"]) if abs(along) <= entry["height"] / 2 + 1e-6 else 1.0
+        on_cap = abs(abs(along) - entry["height"] / 2) if radial <= entry["radius"] + 1e-6 else 1.0
+        worst = max(worst, min(on_side, on_cap))
+    return worst
+
+
+def test_rotated_scaled_cylinder_and_box_convert_to_shot_axes(scene):
+    cyl = add_primitive("cylinder", "Obstacles", radius=0.5, depth=2.0, location=(1.0, 2.0, 3.0),
+                        rotation=(math.radians(30), math.radians(-50), math.radians(70)))
+    cyl.scale = (0.4, 0.4, 1.5)
+    box = add_primitive("cube", "Obstacles", size=2.0, location=(-1.0, 0.5, 0.25),
+                        rotation=(math.radians(10), math.radians(80), math.radians(-120)))
+    box.scale = (0.3, 1.2, 0.7)
+    ball = add_primitive("uv_sphere", "Obstacles", radius=0.25, location=(0.0, -2.0, 0.5))
+    bpy.context.view_layer.update()
+    shot, warnings = shot_builder.build_shot(scene, scene.beeswarm)
+    doc = tomllib.loads(shot_builder.shot_toml(shot))
+    obstacles = {o["name"]: o for o in doc["obstacle"]}
+    assert obstacles["Cylinder"]["type"] == "cylinder"
+    assert obstacles["Cube"]["type"] == "box"
+    assert obstacles["Sphere"]["type"] == "sphere"
+
+    def shot_verts(obj):
+        return [shot_builder.to_shot(obj.matrix_world @ v.co) for v in obj.data.vertices]
+
+    c = obstacles["Cylinder"]
+    assert c["radius"] == pytest.approx(0.2, abs=1e-6)
+    assert c["height"] == pytest.approx(3.0, abs=1e-6)
+    assert shot_points_on_cylinder(c, shot_verts(cyl)) < 1e-5
+
+    b = obstacles["Cube"]
+    rot = Euler([math.radians(a) for a in b["rotation"]], "XYZ").to_matrix()
+    half = Vector(b["size"]) / 2
+    corners = [Vector(b["center"]) + rot @ Vector((sx * half.x, sy * half.y, sz * half.z))
+               for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    verts = [Vector(p) for p in shot_verts(box)]
+    assert len(verts) == 8
+    assert max(min((c - v).length for c in corners) for v in verts) < 1e-5
+    assert max(min((c - v).length for v in verts) for c in corners) < 1e-5
+
+    s = obstacles["Sphere"]
+    assert s["center"] == pytest.approx([0.0, 0.5, 2.0], abs=1e-6)
+    assert s["radius"] == pytest.approx(0.25, abs=1e-3)
+    assert not warnings
+
+
+def test_targets_and_spawn_from_scene(scene):
+    add_empty("Nest", (0.5, 1.0, 2.0))
+    add_empty("food", (1.0, -1.0, 0.5), beeswarm_type="flower", beeswarm_radius=0.1)
+    moving = add_empty("Attractor.001", (0.0, 0.0, 1.0))
+    moving.keyframe_insert("location", frame=1)
+    moving.location = (0.0, 2.0, 1.0)
+    moving.keyframe_insert("location", frame=36)
+    spawn = bpy.data.objects.new("spawn", None)
+    spawn.empty_display_type = "CUBE"
+    spawn.location = (0.0, 0.0, 1.5)
+    spawn.scale = (0.5, 1.0, 0.25)
+    scene.collection.objects.link(spawn)
+    scene.beeswarm.spawn_object = spawn
+    scene.beeswarm.wind = (1.0, 2.0, 0.0)
+    bpy.context.view_layer.update()
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
+    doc = tomllib.loads(shot_builder.shot_toml(shot))
+    t = {x["name"]: x for x in doc["target"]}
+    assert t["Nest"]["type"] == "nest" and t["Nest"]["position"] == pytest.approx([0.5, 2.0, -1.0])
+    assert t["food"]["type"] == "flower" and t["food"]["radius"] == pytest.approx(0.1)
+    assert t["food"]["position"] == pytest.approx([1.0, 0.5, 1.0])
+    keys = t["Attractor.001"]["keys"]
+    assert len(keys) == 36 and keys[0]["frame"] == 1
+    assert keys[-1]["position"] == pytest.approx([0.0, 1.0, -2.0])
+    assert doc["swarm"][0]["spawn"] == {"shape": "box", "center": pytest.approx([0.0, 1.5, 0.0]),
+                                        "size": pytest.approx([1.0, 0.5, 2.0])}
+    assert doc["wind"]["velocity"] == pytest.approx([1.0, 0.0, -2.0])
+    assert doc["scene"]["frames"] == [1, 36] and doc["scene"]["fps"] == 24
+
+
+@pytest.mark.parametrize("kind,kw,expected", [
+    ("cube", {}, "box"),
+    ("uv_sphere", {}, "sphere"),
+    ("ico_sphere", {"subdivisions": 2}, "sphere"),
+    ("cylinder", {"vertices": 16}, "cylinder"),
+    ("cylinder", {"vertices": 32, "end_fill_type": "TRIFAN"}, "cylinder"),
+    ("plane", {}, "plane"),
+])
+def test_mesh_shape_heuristics(scene, kind, kw, expected):
+    obj = add_primitive(kind, "Obstacles", **kw)
+    obj.name = "thing"  # the name must not decide
+    assert shot_builder.obstacle_kind(obj) == expected
+
+
+def test_custom_property_and_name_decide_the_type(scene):
+    blob = add_primitive("ico_sphere", "Obstacles")
+    blob["beeswarm_type"] = "box"
+    assert shot_builder.obstacle_kind(blob) == "box"
+    # An irregular mesh: told by its name.
+    me = bpy.data.meshes.new("irregular")
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (0, 2, 0), (0, 0, 0.3), (0.5, 0.5, 0.1)], [], [])
+    ob = bpy.data.objects.new("column_cylinder", me)
+    bpy.data.collections["Obstacles"].objects.link(ob)
+    assert shot_builder.obstacle_kind(ob) == "cylinder"
+    ob.name = "rock"
+    assert shot_builder.obstacle_kind(ob) is None
+
+
+def test_built_shot_passes_beeswarm_check(scene, beeswarm_bin, tmp_path):
+    shot_cylinder_scene(scene)
+    add_primitive("cube", "Obstacles", size=0.2, location=(-0.6, 0.0, 0.3))
+    scene.beeswarm.ground = True
+    bpy.context.view_layer.update()
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
+    path = tmp_path / "built.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot, "test"))
+    r = subprocess.run([beeswarm_bin, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "3 obstacle(s)" in r.stdout and "1 target(s)" in r.stdout
+
+
+def test_toml_writer_escapes_and_round_trips():
+    from blender_addon import toml_writer
+    doc = {"scene": {"name": 'a "quoted"\\name', "fps": 23.976, "frames": [1, 2]},
+           "swarm": [{"name": "s", "count": 3, "spawn": {"shape": "box", "size": [1.0, 2.0, 3.0]},
+                      "params": {"speed": 1.5}}],
+           "target": [{"type": "nest", "keys": [{"frame": 1, "position": [0.0, 1.0, 2.0]}]}]}
+    back = tomllib.loads(toml_writer.dumps(doc, header="x\ny"))
+    assert back == doc
+
+
+def test_binary_discovery(tmp_path, monkeypatch):
+    repo = tmp_path / "repo"
+    exe = repo / "target" / "release" / binary.EXE
+    exe.parent.mkdir(parents=True)
+    exe.write_text("#!/bin/sh\n")
+    exe.chmod(exe.stat().st_mode | stat.S_IXUSR)
+    addon_dir = repo / "blender_addon"
+    addon_dir.mkdir()
+    monkeypatch.setenv("PATH", str(tmp_path / "nowhere"))
+    assert binary.discover(addon_dir, use_cache=False) == exe
+    assert binary.search_upwards(tmp_path) is None
+    on_path = tmp_path / "bin" / binary.EXE
+    on_path.parent.mkdir()
+    on_path.write_text("#!/bin/sh\n")
+    on_path.chmod(0o755)
+    monkeypatch.setenv("PATH", str(on_path.parent))
+    assert binary.discover(addon_dir, use_cache=False) == on_path
+    assert binary.resolve(str(tmp_path / "missing"))[0] is None
+    assert binary.resolve(str(exe))[0] == exe
+
+
+# ---------------------------------------------------------------------------------------
+# Failures: an error in Blender's UI, nothing imported
+
+def previous_swarm_intact(name, before):
+    after = sorted(o.name for o in bpy.data.objects if o.get(importer.SHOT_TAG) == name)
+    assert after == before
+    assert not [c for c in bpy.data.collections if c.name.endswith(".importing")]
+
+
+def test_missing_binary_reports_and_imports_nothing(scene, tmp_path):
+    shot_cylinder_scene(scene)
+    with pytest.raises(RuntimeError, match="No beeswarm binary"):
+        bake("USD", str(tmp_path / "no" / "beeswarm"))
+    assert not shot_collections("bltest")
+    assert not [o for o in bpy.data.objects if o.get(importer.SHOT_TAG)]
+
+
+def test_count_zero_is_an_error(scene, beeswarm_bin):
+    shot_cylinder_scene(scene)
+    scene.beeswarm.count = 0
+    with pytest.raises(RuntimeError, match="at least 1 bee"):
+        bake("USD", beeswarm_bin)
+    assert not shot_collections("bltest")
+    assert scene.beeswarm.last_message.startswith("Error")
+
+
+def test_failing_bake_shows_the_binarys_message(scene, beeswarm_bin, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[scene]\nname = "bad"\n\n[[swarm]]\ncount = 10\nspeling = 3\n')
+    frames = (scene.frame_start, scene.frame_end, scene.render.fps)
+    with pytest.raises(RuntimeError) as err:
+        bake("USD", beeswarm_bin, shot_path=str(bad))
+    msg = str(err.value)
+    assert "Bake failed" in msg and "bad.toml:6" in msg and "speling" in msg
+    assert not shot_collections("bad")
+    assert (scene.frame_start, scene.frame_end, scene.render.fps) == frames
+
+
+def test_cancel_kills_the_bake_and_keeps_the_previous_cache(beeswarm_bin, tmp_path):
+    shot = tmp_path / "long.shot.toml"
+    shot.write_text('[scene]\nname = "long"\nframes = [1, 100000]\n\n[[swarm]]\ncount = 2000\n'
+                    '\n[output]\nformats = ["csv"]\n')
+    out = tmp_path / "out"
+    first = runner.BakeProcess([beeswarm_bin, "bake", str(shot), "--out", str(out),
+                                "--progress", "json", "--frames", "1:3"])
+    while first.wait_event(30)[0] != "exit":
+        pass
+    assert first.returncode == 0, first.stderr
+    cache = out / "long.tracks.csv"
+    before = cache.read_bytes()
+    p = runner.BakeProcess([beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json"])
+    ev = p.wait_event(30)
+    assert ev and ev[0] == "progress", (ev, p.stderr)
+    assert 0.0 <= runner.fraction(ev[1]) < 1.0
+    t = time.monotonic()
+    p.cancel()
+    assert time.monotonic() - t < 5
+    assert p.returncode != 0 and p.cancelled
+    assert cache.read_bytes() == before
+    assert sorted(x.name for x in out.iterdir() if not x.name.startswith(".")) == ["long.tracks.csv"]
+
+
+# ---------------------------------------------------------------------------------------
+# Bake and import
+
+def usd_instancer(name):
+    coll = bpy.data.collections[name]
+    pcs = [o for o in coll.all_objects if o.type == "POINTCLOUD"]
+    assert len(pcs) == 1, [o.name for o in coll.all_objects]
+    return pcs[0]
+
+
+def usd_instances(name, frame):
+    """{bee id: (Blender world position, instance velocity attr)} at a frame."""
+    sc = bpy.context.scene
+    sc.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    inst = usd_instancer(name)
+    geo = inst.evaluated_get(dg).evaluated_geometry().instances_pointcloud()
+    n = len(geo.points)
+    ids = np.zeros(n, np.int32)
+    geo.attributes["id"].data.foreach_get("value", ids)
+    vel = np.zeros(n * 3, np.float32)
+    geo.attributes["velocity"].data.foreach_get("vector", vel)
+    vel = vel.reshape(n, 3)
+    positions = [inst_.matrix_world.translation.copy() for inst_ in dg.object_instances
+                 if inst_.is_instance and inst_.parent and inst_.parent.original == inst]
+    assert len(positions) == n
+    return {int(i): (p, v) for i, p, v in zip(ids, positions, vel)}
+
+
+def check_swarm_against_csv(name, count, get_positions, tracks, frames):
+    bee = sorted(tracks)[count // 2]
+    for f in frames:
+        pos = get_positions(f)
+        assert len(pos) == count
+        want = blender_from_shot([tracks[bee][f][k] for k in ("x", "y", "z")])
+        got = pos[bee][0] if isinstance(pos[bee], tuple) else pos[bee]
+        assert (got - want).length < TOL, (f, bee, got, want)
+
+
+def no_bee_inside(cyl, tracks, radius=0.08, depth=1.6):
+    inv = cyl.matrix_world.inverted()
+    worst = math.inf
+    for rows in tracks.values():
+        for r in rows.values():
+            local = inv @ blender_from_shot((r["x"], r["y"], r["z"]))
+            radial = math.hypot(local.x, local.y)
+            depth_in = min(radius - radial, depth / 2 - abs(local.z))
+            worst = min(worst, -depth_in)  # >0: outside
+    return worst
+
+
+def test_usd_bake_imports_the_swarm_once_and_rebakes_in_place(scene, beeswarm_bin, tmp_path):
+    cyl = shot_cylinder_scene(scene)
+    scene.render.fps = 30
+    scene.frame_start, scene.frame_end = 5, 40
+    t0 = time.monotonic()
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    print(f"USD bake + import: {time.monotonic() - t0:.2f} s")
+    assert (tmp_path / "bltest.shot.toml").is_file()
+    cache_dir = tmp_path / "beeswarm_cache" / "bltest"
+    assert (cache_dir / "bltest.usda").is_file()
+    assert len(shot_collections("bltest")) == 1 and "bltest" in bpy.data.collections
+    assert (scene.render.fps, scene.render.fps_base) == (30, 1.0)
+    assert (scene.frame_start, scene.frame_end) == (5, 40)
+    tracks = read_tracks(cache_dir / "bltest.tracks.csv")
+    assert len(tracks) == 40
+    check_swarm_against_csv("bltest", 40, lambda f: usd_instances("bltest", f), tracks, (5, 22, 40))
+    assert no_bee_inside(cyl, tracks) > 0.0
+
+    # id and velocity on the instances equal the tracks (instancer-local = shot axes).
+    at = usd_instances("bltest", 22)
+    assert sorted(at) == sorted(tracks)
+    for bee, (_, v) in at.items():
+        row = tracks[bee][22]
+        assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
+
+    first = {b: p.copy() for b, (p, _) in usd_instances("bltest", 30).items()}
+    n_objects = len(bpy.data.objects)
+    scene.beeswarm.seed = 2
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    assert len(shot_collections("bltest")) == 1 and "bltest" in bpy.data.collections
+    assert len(bpy.data.objects) == n_objects
+    assert not [o for o in bpy.data.objects if o.name.startswith("~old")]
+    tracks2 = read_tracks(cache_dir / "bltest.tracks.csv")
+    second = usd_instances("bltest", 30)
+    assert max((first[b] - second[b][0]).length for b in first) > 1e-3
+    check_swarm_against_csv("bltest", 40, lambda f: usd_instances("bltest", f), tracks2, (5, 30))
+    assert no_bee_inside(cyl, tracks2) > 0.0
+
+
+def gltf_bees(name):
+    """{bee index: object} for the imported glTF bees: the objects whose own animation
+    moves them (the writer's bee nodes)."""
+    coll = bpy.data.collections[name]
+    return [o for o in coll.all_objects if o.animation_data and o.animation_data.action]
+
+
+def test_gltf_bake_imports_the_swarm_once(scene, beeswarm_bin, tmp_path):
+    cyl = shot_cylinder_scene(scene)
+    t0 = time.monotonic()
+    assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}
+    print(f"glTF bake + import: {time.monotonic() - t0:.2f} s")
+    cache_dir = tmp_path / "beeswarm_cache" / "bltest"
+    assert (cache_dir / "bltest.glb").is_file()
+    assert len(shot_collections("bltest")) == 1
+    assert (scene.render.fps, scene.frame_start, scene.frame_end) == (24, 1, 36)
+    tracks = read_tracks(cache_dir / "bltest.tracks.csv")
+    bees = gltf_bees("bltest")
+    assert len(bees) == 40
+
+    def positions(frame):
+        scene.frame_set(frame)
+        out = {}
+        for o in bees:
+            bee = int(o.get("beeswarm_id", o.get("id", -1)))
+            out[bee] = o.matrix_world.translation.copy()
+        return out
+
+    check_swarm_against_csv("bltest", 40, positions, tracks, (1, 18, 36))
+    assert no_bee_inside(cyl, tracks) > 0.0
+    n_objects = len(bpy.data.objects)
+    scene.beeswarm.seed = 5
+    assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}
+    assert len(shot_collections("bltest")) == 1 and len(bpy.data.objects) == n_objects
+    check_swarm_against_csv("bltest", 40, positions if False else (
+        lambda f: {int(o.get("beeswarm_id", o.get("id", -1))): (scene.frame_set(f) or o.matrix_world.translation.copy())
+                   for o in gltf_bees("bltest")}),
+        read_tracks(cache_dir / "bltest.tracks.csv"), (1, 36))
