@@ -350,7 +350,8 @@ def usd_instances(name, frame):
     sc.frame_set(frame)
     dg = bpy.context.evaluated_depsgraph_get()
     inst = usd_instancer(name)
-    geo = inst.evaluated_get(dg).evaluated_geometry().instances_pointcloud()
+    geometry_set = inst.evaluated_get(dg).evaluated_geometry()  # keeps geo alive
+    geo = geometry_set.instances_pointcloud()
     n = len(geo.points)
     ids = np.zeros(n, np.int32)
     geo.attributes["id"].data.foreach_get("value", ids)
@@ -462,3 +463,96 @@ def test_gltf_bake_imports_the_swarm_once(scene, beeswarm_bin, tmp_path):
         lambda f: {int(o.get("beeswarm_id", o.get("id", -1))): (scene.frame_set(f) or o.matrix_world.translation.copy())
                    for o in gltf_bees("bltest")}),
         read_tracks(cache_dir / "bltest.tracks.csv"), (1, 36))
+
+
+# ---------------------------------------------------------------------------------------
+# The panel (drawn into a recording stand-in for UILayout: headless Blender has no UI)
+
+class RecordingLayout:
+    def __init__(self, log):
+        self.log = log
+        self.alert = False
+        self.enabled = True
+        self.scale_y = 1.0
+
+    def _child(self, *a, **k):
+        return RecordingLayout(self.log)
+
+    row = column = box = split = _child
+
+    def label(self, text="", icon="NONE"):
+        self.log.append(("label", text))
+
+    def prop(self, data, prop, **kw):
+        assert prop in data.bl_rna.properties, prop
+        self.log.append(("prop", prop))
+
+    def operator(self, idname, **kw):
+        self.log.append(("operator", idname))
+
+        class Props:
+            pass
+        return Props()
+
+
+def draw_panel(context):
+    from blender_addon import panel
+    log = []
+    holder = type("Holder", (), {"layout": RecordingLayout(log)})()
+    panel.BEESWARM_PT_panel.draw(holder, context)
+    return log
+
+
+def test_panel_draws_settings_and_says_when_no_binary(scene, monkeypatch, beeswarm_bin):
+    monkeypatch.setattr(binary, "discover", lambda *a, **k: None)
+    log = draw_panel(bpy.context)
+    text = " ".join(t for kind, t in log if kind == "label")
+    assert "No beeswarm binary found" in text
+    props_shown = {t for kind, t in log if kind == "prop"}
+    assert {"count", "preset", "seed", "obstacles", "targets", "format"} <= props_shown
+    assert ("operator", "beeswarm.bake") in log
+    monkeypatch.setattr(binary, "discover", lambda *a, **k: pathlib.Path(beeswarm_bin))
+    scene.beeswarm.source = "FILE"
+    log = draw_panel(bpy.context)
+    assert "No beeswarm binary" not in " ".join(t for kind, t in log if kind == "label")
+    assert ("prop", "shot_file") in log and ("prop", "count") not in log
+
+
+# ---------------------------------------------------------------------------------------
+# As an installed extension
+
+def test_manifest_validates_with_blenders_extension_tool():
+    tool = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / \
+        "cli" / "blender_ext.py"
+    if not tool.is_file():
+        pytest.skip(f"{tool} is not in this bpy build")
+    r = subprocess.run([sys.executable, str(tool), "validate", str(ROOT / "blender_addon")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    manifest = tomllib.loads((ROOT / "blender_addon" / "blender_manifest.toml").read_text())
+    assert manifest["id"] == "beeswarm" and manifest["schema_version"] == "1.0.0"
+    assert manifest["blender_version_min"] == "4.2.0"
+
+
+ENABLE_AS_EXTENSION = r'''
+import os, sys, bpy
+ext = bpy.utils.user_resource("EXTENSIONS", path="user_default", create=True)
+os.symlink(sys.argv[-2], os.path.join(ext, "beeswarm"))
+assert bpy.ops.preferences.addon_enable(module="bl_ext.user_default.beeswarm") == {"FINISHED"}
+prefs = bpy.context.preferences.addons["bl_ext.user_default.beeswarm"].preferences
+prefs.binary_path = sys.argv[-1]
+try:
+    bpy.ops.beeswarm.bake()
+except RuntimeError as e:
+    print("REPORTED:", e)
+'''
+
+
+def test_enables_as_an_extension_and_reads_its_preference(tmp_path):
+    missing = tmp_path / "not-here" / "beeswarm"
+    r = subprocess.run(
+        [sys.executable, "-c", ENABLE_AS_EXTENSION, str(ROOT / "blender_addon"), str(missing)],
+        capture_output=True, text=True, timeout=120,
+        env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res")})
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert f"REPORTED: Error: No beeswarm binary at {missing}" in r.stdout
