@@ -556,3 +556,102 @@ def test_enables_as_an_extension_and_reads_its_preference(tmp_path):
         env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert f"REPORTED: Error: No beeswarm binary at {missing}" in r.stdout
+
+
+# ---------------------------------------------------------------------------------------
+# Failures after a good start (a stand-in binary: tests/python/blender_fake_beeswarm.py)
+
+@pytest.fixture
+def fake_bin(tmp_path):
+    script = pathlib.Path(__file__).with_name("blender_fake_beeswarm.py")
+    wrapper = tmp_path / "fakebin" / "beeswarm"
+    wrapper.parent.mkdir()
+    wrapper.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{script}" "$@"\n')
+    wrapper.chmod(0o755)
+    return str(wrapper)
+
+
+def test_failed_or_unreadable_rebake_keeps_the_previous_swarm(scene, fake_bin, monkeypatch):
+    shot_cylinder_scene(scene)
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "ok")
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    before = sorted(o.name for o in bpy.data.objects if o.get(importer.SHOT_TAG) == "bltest")
+    assert before and len(shot_collections("bltest")) == 1
+    n_ids = {a: len(getattr(bpy.data, a)) for a in ("objects", "meshes", "node_groups",
+                                                    "collections", "cache_files", "pointclouds")}
+    scene.beeswarm.seed = 9
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "fail")
+    with pytest.raises(RuntimeError, match="simulation diverged"):
+        bake("USD", fake_bin)
+    previous_swarm_intact("bltest", before)
+
+    # A bake that exits 0 with a file Blender cannot read: the import is rolled back.
+    scene.frame_end = 20
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "corrupt")
+    for fmt in ("USD", "GLTF"):
+        with pytest.raises(RuntimeError, match="Import of bltest"):
+            bake(fmt, fake_bin)
+        previous_swarm_intact("bltest", before)
+        assert {a: len(getattr(bpy.data, a)) for a in n_ids} == n_ids
+        assert len(shot_collections("bltest")) == 1
+        assert (scene.frame_start, scene.frame_end) == (1, 20)  # the scene's own, restored
+
+
+class ProbeEngine(bpy.types.RenderEngine):
+    """A render engine that renders nothing and records what a renderer would see of the
+    swarm: the render depsgraph's instances at the frame and at the motion-blur sub-frame
+    (the way Cycles steps through the shutter)."""
+    bl_idname = "BEESWARM_PROBE"
+    bl_label = "beeswarm probe"
+    seen = {}
+
+    def _look(self, depsgraph, key):
+        for ob in depsgraph.objects:
+            if ob.type == "POINTCLOUD":
+                gs = ob.evaluated_geometry()
+                ip = gs.instances_pointcloud()
+                n = len(ip.points)
+                v = np.zeros(n * 3, np.float32)
+                ip.attributes["velocity"].data.foreach_get("vector", v)
+                ids = np.zeros(n, np.int32)
+                ip.attributes["id"].data.foreach_get("value", ids)
+                pos = [tuple(i.matrix_world.translation) for i in depsgraph.object_instances
+                       if i.is_instance and i.parent and i.parent.name == ob.name]
+                ProbeEngine.seen[key] = (ids, v.reshape(n, 3), np.array(pos))
+
+    def render(self, depsgraph):
+        f = depsgraph.scene.frame_current
+        self._look(depsgraph, float(f))
+        self.frame_set(f, 0.5)
+        self._look(depsgraph, f + 0.5)
+        self.frame_set(f, 0.0)
+        r = self.begin_result(0, 0, 4, 4)
+        self.end_result(r)
+
+
+def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
+    scene.beeswarm.count = 12
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    tracks = read_tracks(pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.tracks.csv")))
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    bpy.utils.register_class(ProbeEngine)
+    try:
+        scene.render.engine = ProbeEngine.bl_idname
+        scene.render.resolution_x = scene.render.resolution_y = 4
+        ProbeEngine.seen.clear()
+        scene.frame_set(7)
+        bpy.ops.render.render()
+    finally:
+        bpy.utils.unregister_class(ProbeEngine)
+    for key in (7.0, 7.5):
+        ids, vel, pos = ProbeEngine.seen[key]
+        assert sorted(ids) == sorted(tracks) and len(pos) == 12
+        for k, bee in enumerate(ids):
+            a, b = tracks[int(bee)][7], tracks[int(bee)][8]
+            t = key - 7
+            want_v = [(1 - t) * a[c] + t * b[c] for c in ("vx", "vy", "vz")]
+            want_p = blender_from_shot([(1 - t) * a[c] + t * b[c] for c in ("x", "y", "z")])
+            assert np.allclose(vel[k], want_v, atol=1e-5)
+            assert (Vector(pos[k]) - want_p).length < TOL
