@@ -9,7 +9,7 @@ Sub-frame times are interpolated from the time samples, so transform motion blur
 and instances are told apart by their index (the order of the bees never changes).
 
 What this module adds: the tracks CSV (always baked beside the cache) is turned into a
-sidecar `.motion.npz` (ids, and velocities per frame, in the shot's Y-up axes, which is the
+sidecar `.velocity.npy` (velocities per frame, in the shot's Y-up axes, which is the
 imported point cloud's local space). A hidden helper mesh `<shot>.motion` has one vertex per
 bee with `id` and `velocity` attributes; a persistent frame-change handler writes the
 current frame's velocities into it (linear between frames for sub-frames), and a Geometry
@@ -25,53 +25,62 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 HELPER_TAG = "beeswarm_motion"  # on the helper object: the sidecar path
+START_TAG = "beeswarm_frame_start"  # on the helper object: the sidecar's first frame
 MODIFIER = "beeswarm motion"
 
-_cache = {}  # sidecar path → (mtime, ids, velocities array, frame_start)
+_cache = {}  # absolute sidecar path → (mtime, memory-mapped velocities [F, N, 3])
 
 
 # ---------------------------------------------------------------------------------------
 # Tracks CSV → sidecar
 
-def read_tracks_csv(path, chunk_rows=1_000_000):
-    """(ids[N], frames[F], positions[F,N,3], velocities[F,N,3]) from a tracks CSV, in
-    the file's order (the bees' order is the same in every frame)."""
-    cols = None
+def read_tracks_csv(path, chunk_rows=500_000):
+    """(ids[N], frames[F], first-frame positions[N,3], velocities[F,N,3]) from a tracks CSV,
+    in the file's order (the bees' order is the same in every frame). Only the columns
+    needed are parsed, in chunks, into float32."""
+    chunks = []
+    ids = first_pos = None
+    f0 = None
     with open(path, "r", encoding="utf-8") as f:
         header = f.readline().strip().split(",")
         cols = [header.index(c) for c in ("id", "frame", "x", "y", "z", "vx", "vy", "vz")]
-        parts = []
         while True:
             block = np.loadtxt(f, delimiter=",", usecols=cols, max_rows=chunk_rows, ndmin=2,
                                dtype=np.float64)
             if block.size == 0:
                 break
-            parts.append(block)
+            if f0 is None:
+                f0 = int(block[0, 1])
+                rest = np.flatnonzero(block[:, 1] != f0)
+                if not len(rest) and len(block) == chunk_rows:
+                    return read_tracks_csv(path, chunk_rows * 8)  # more bees than a chunk
+                n = int(rest[0]) if len(rest) else len(block)
+                ids = block[:n, 0].astype(np.int64)
+                first_pos = block[:n, 2:5].astype(np.float32)
+            chunks.append(block[:, 5:8].astype(np.float32))
             if len(block) < chunk_rows:
                 break
-    data = np.concatenate(parts) if parts else np.zeros((0, 8))
-    frame = data[:, 1].astype(np.int64)
-    frames = np.unique(frame)
-    if len(frames) == 0:
+    if f0 is None:
         raise ValueError(f"{os.path.basename(path)} has no rows")
-    n = int(np.count_nonzero(frame == frames[0]))
-    if n * len(frames) != len(data):
+    vel = np.concatenate(chunks)
+    n = len(ids)
+    if len(vel) % n:
         raise ValueError(f"{os.path.basename(path)}: the number of bees changes between frames")
-    data = data.reshape(len(frames), n, 8)
-    ids = data[0, :, 0].astype(np.int64)
-    return ids, frames, data[:, :, 2:5].astype(np.float32), data[:, :, 5:8].astype(np.float32)
+    vel = vel.reshape(len(vel) // n, n, 3)
+    return ids, np.arange(len(vel), dtype=np.int64) + f0, first_pos, vel
 
 
-def write_sidecar(csv_path, sidecar_path, offset=0, count=None):
-    ids, frames, pos, vel = read_tracks_csv(csv_path)
-    count = len(ids) - offset if count is None else count
-    tmp = str(sidecar_path) + ".tmp.npz"
-    np.savez(tmp, ids=ids[offset:offset + count], frames=frames,
-             velocity=vel[:, offset:offset + count])
-    os.replace(tmp, sidecar_path)
+def write_sidecar(path, velocities):
+    """Velocities [F, N, 3] float32 as a .npy (memory-mapped when read), atomically."""
+    path = pathlib.Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        np.save(f, np.ascontiguousarray(velocities, dtype=np.float32))
+    os.replace(tmp, path)
+    _cache.pop(str(path), None)
 
 
-def _load_sidecar(path):
+def load_sidecar(path):
     path = bpy.path.abspath(path)
     try:
         mtime = os.path.getmtime(path)
@@ -79,11 +88,10 @@ def _load_sidecar(path):
         return None
     hit = _cache.get(path)
     if hit and hit[0] == mtime:
-        return hit[1:]
-    with np.load(path) as z:
-        ids, frames, vel = z["ids"], z["frames"], z["velocity"]
-    _cache[path] = (mtime, ids, vel, int(frames[0]))
-    return ids, vel, int(frames[0])
+        return hit[1]
+    vel = np.load(path, mmap_mode="r")
+    _cache[path] = (mtime, vel)
+    return vel
 
 
 def velocity_at(vel, frame_start, frame):
@@ -91,12 +99,14 @@ def velocity_at(vel, frame_start, frame):
     f = frame - frame_start
     last = vel.shape[0] - 1
     if f <= 0:
-        return vel[0]
+        return np.asarray(vel[0])
     if f >= last:
-        return vel[last]
+        return np.asarray(vel[last])
     i = int(np.floor(f))
     t = np.float32(f - i)
-    return vel[i] * (1 - t) + vel[i + 1] * t if t else vel[i]
+    if not t:
+        return np.asarray(vel[i])
+    return vel[i] * (1 - t) + vel[i + 1] * t
 
 
 # ---------------------------------------------------------------------------------------
@@ -156,10 +166,10 @@ def _helper(name, ids, collection):
 
 
 def update_helper(ob, frame):
-    data = _load_sidecar(ob.get(HELPER_TAG, ""))
-    if data is None:
+    vel = load_sidecar(ob.get(HELPER_TAG, ""))
+    if vel is None:
         return False
-    ids, vel, start = data
+    start = int(ob.get(START_TAG, 0))
     me = ob.data
     if len(me.vertices) != vel.shape[1]:
         return False
@@ -181,6 +191,10 @@ def on_frame_change(scene, depsgraph=None):
 
 
 # ---------------------------------------------------------------------------------------
+
+def safe(name):
+    return "".join(c if c.isalnum() or c in "_-" else "_" for c in name)
+
 
 def _instancers(objects):
     return [o for o in objects if o.type == "POINTCLOUD"
@@ -228,19 +242,18 @@ def attach(context, shot_name, fmt, objects, csv_path, frames, collection):
         # The CSV lists every swarm's bees in shot order: find this instancer's block.
         offset = 0
         if n != len(ids):
-            d = np.linalg.norm(pos[0] - pts[0], axis=1)
+            d = np.linalg.norm(pos - pts[0], axis=1)
             offset = int(np.argmin(d))
             if offset + n > len(ids):
                 raise ValueError(f"{ob.name}: {n} instances do not match the tracks CSV")
         block = slice(offset, offset + n)
-        if n and float(np.abs(pos[0, block] - pts).max()) > 1e-3:
+        if n and float(np.abs(pos[block] - pts).max()) > 1e-3:
             raise ValueError(f"{ob.name}: the instances do not match the tracks CSV")
-        sidecar = csv_path.with_name(f"{csv_path.name[:-len('.tracks.csv')]}.{ob.name}.motion.npz")
-        tmp = str(sidecar) + ".tmp.npz"
-        np.savez(tmp, ids=ids[block], frames=csv_frames, velocity=vel[:, block])
-        os.replace(tmp, sidecar)
-        _cache.pop(str(sidecar), None)
+        stem = csv_path.name[: -len(".tracks.csv")]
+        sidecar = csv_path.with_name(f"{stem}.{safe(ob.name)}.velocity.npy")
+        write_sidecar(sidecar, vel[:, block])
         helper = _helper(f"{shot_name}.{ob.name}.motion", ids[block], collection)
+        helper[START_TAG] = int(csv_frames[0])
         try:
             helper[HELPER_TAG] = bpy.path.relpath(str(sidecar)) if bpy.data.filepath else str(sidecar)
         except ValueError:  # another drive

@@ -6,6 +6,7 @@ outputs atomically, so the previous cache stays) and imports nothing. In backgro
 (`blender -b`, a farm, the tests) and when called from a script (EXEC_DEFAULT) it runs to
 completion synchronously.
 """
+import atexit
 import os
 import pathlib
 import tempfile
@@ -45,6 +46,25 @@ def cache_dir(settings, shot_name):
     return base / shot_name
 
 
+def _written_by_addon(path):
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.readline().startswith(shot_builder.HEADER_MARK)
+    except OSError:
+        return False
+
+
+def _kill_running_bake():
+    """Blender quitting or the add-on going away: the bake runs in its own process group,
+    so it would outlive Blender otherwise."""
+    job = _active["job"]
+    if job is not None and job.process is not None and job.process.running():
+        job.process.cancel(grace=0.5)
+
+
+atexit.register(_kill_running_bake)
+
+
 class Job:
     """Everything one bake needs, prepared before the subprocess starts."""
 
@@ -80,6 +100,9 @@ class Job:
             self.shot_path = folder / f"{self.name}.shot.toml"
             source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
             text = shot_builder.shot_toml(shot, source)
+            if self.shot_path.exists() and not _written_by_addon(self.shot_path):
+                raise BakeError(f"{self.shot_path} exists and was not written by the add-on; "
+                                f"give the shot another name (it would be overwritten)")
             tmp = self.shot_path.with_name(self.shot_path.name + ".tmp")
             tmp.write_text(text, encoding="utf-8")
             os.replace(tmp, self.shot_path)
@@ -118,7 +141,8 @@ class Job:
             _, fps, frames = importer.shot_info(str(self.shot_path))
 
         def after(collection, objects):
-            return motion.attach(context, name, self.format, objects, csv, frames, collection)
+            if self.settings.instance_motion:
+                motion.attach(context, name, self.format, objects, csv, frames, collection)
 
         try:
             return importer.import_cache(context, name, str(cache), self.format, fps, frames,
@@ -317,9 +341,7 @@ def register():
 
 
 def unregister():
-    for job in [_active["job"]]:
-        if job is not None and job.process is not None:
-            job.process.cancel()
+    _kill_running_bake()
     _active["job"] = None
     for c in reversed(classes):
         bpy.utils.unregister_class(c)

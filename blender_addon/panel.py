@@ -55,6 +55,8 @@ class BEESWARM_PT_panel(bpy.types.Panel):
             layout.prop(s, "wind")
         layout.prop(s, "cache_dir")
         layout.prop(s, "format", expand=True)
+        if s.format == "USD":
+            layout.prop(s, "instance_motion")
         row = layout.row()
         row.scale_y = 1.4
         busy = operators._active["job"] is not None

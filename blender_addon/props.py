@@ -92,6 +92,10 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
         name="Cache Folder", subtype="DIR_PATH", default="//beeswarm_cache/",
         description="Where caches are written (// = next to the .blend; an unsaved file "
                     "uses a temporary folder)")
+    instance_motion: BoolProperty(
+        name="Instance id & velocity", default=True,
+        description="USD: give the imported instances the bees' ids and velocities from the "
+                    "tracks CSV (Blender's USD import drops them)")
     last_message: StringProperty(name="Last Bake", default="")
 
 

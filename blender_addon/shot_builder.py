@@ -348,7 +348,10 @@ def build_shot(scene, settings, name=None):
     return shot, warnings
 
 
+HEADER_MARK = "# Written by the beeswarm Blender add-on"
+
+
 def shot_toml(shot, source=""):
-    header = ("Written by the beeswarm Blender add-on" + (f" from {source}" if source else "")
+    header = (HEADER_MARK[2:] + (f" from {source}" if source else "")
               + ".\nY-up, metres, seconds: Blender (x, y, z) is (x, z, -y) here.")
     return toml_writer.dumps(shot, header=header)

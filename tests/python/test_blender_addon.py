@@ -655,3 +655,15 @@ def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
             want_p = blender_from_shot([(1 - t) * a[c] + t * b[c] for c in ("x", "y", "z")])
             assert np.allclose(vel[k], want_v, atol=1e-5)
             assert (Vector(pos[k]) - want_p).length < TOL
+
+
+def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path):
+    mine = tmp_path / "bltest.shot.toml"
+    mine.write_text("# my hand-made shot\n[scene]\nname = \"bltest\"\n")
+    with pytest.raises(RuntimeError, match="not written by the add-on"):
+        bake("USD", fake_bin)
+    assert mine.read_text().startswith("# my hand-made shot")
+    mine.unlink()
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    assert bake("USD", fake_bin) == {"FINISHED"}  # its own file: rewritten
+    assert mine.read_text().startswith(shot_builder.HEADER_MARK)
