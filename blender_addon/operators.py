@@ -179,11 +179,10 @@ class BEESWARM_OT_bake(bpy.types.Operator):
         job = self._prepare(context)
         if job is None:
             return {"CANCELLED"}
+        if not self._start(job):
+            return {"CANCELLED"}
         _active["job"] = job
         try:
-            job.process_start_ok = self._start(job)
-            if not job.process_start_ok:
-                return {"CANCELLED"}
             last = 0.0
             while True:
                 ev = job.process.wait_event(timeout=0.5)
@@ -196,6 +195,11 @@ class BEESWARM_OT_bake(bpy.types.Operator):
                           f"({payload.get('done', '?')}/{payload.get('total')})", flush=True)
                 if kind == "exit":
                     break
+        except BaseException:  # Ctrl-C in a background Blender: stop the bake too
+            job.process.cancel()
+            _active["job"] = None
+            raise
+        try:
             return self._complete(context, job)
         finally:
             _active["job"] = None
