@@ -5,7 +5,8 @@ read, or write a USDA PointInstancer with exactly known content.
     python blender_fake_beeswarm.py bake SHOT --out DIR --format usda,csv --progress json
 
 BEESWARM_FAKE_MODE: "ok" (default: bees circling the spawn centre), "fail" (progress, then
-an error on stderr and exit 1), "corrupt" (exit 0, but the cache is not USD or glTF).
+an error on stderr and exit 1), "corrupt" (exit 0, but the cache is not USD or glTF),
+"slow" (progress, then a minute of nothing: for cancelling).
 """
 import json
 import math
@@ -34,6 +35,9 @@ def main(argv):
     out.mkdir(parents=True, exist_ok=True)
     print(json.dumps({"event": "progress", "frame": f0, "done": 1, "total": f1 - f0 + 1,
                       "elapsed_s": 0.0}), flush=True)
+    if mode == "slow":
+        import time
+        time.sleep(60)
     if mode == "fail":
         print(f"error: {shot}: the simulation diverged at frame {f0 + 1}", file=sys.stderr)
         return 1

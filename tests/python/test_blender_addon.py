@@ -667,3 +667,115 @@ def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path
     assert bake("USD", fake_bin) == {"FINISHED"}
     assert bake("USD", fake_bin) == {"FINISHED"}  # its own file: rewritten
     assert mine.read_text().startswith(shot_builder.HEADER_MARK)
+
+
+# ---------------------------------------------------------------------------------------
+# The modal path, driven by hand: headless Blender has no event loop, so the operator's
+# own invoke-side state is set up here and its modal() fed timer and Esc events.
+
+class FakeWM:
+    def __init__(self):
+        self.progress = []
+        self.timers = 0
+
+    def progress_begin(self, a, b):
+        self.progress.append(("begin", a, b))
+
+    def progress_update(self, v):
+        self.progress.append(v)
+
+    def progress_end(self):
+        self.progress.append("end")
+
+    def event_timer_remove(self, timer):
+        self.timers -= 1
+
+
+class FakeWorkspace:
+    def __init__(self):
+        self.status = []
+
+    def status_text_set(self, text):
+        self.status.append(text)
+
+
+def modal_operator(job):
+    from blender_addon import operators
+    op_type = operators.BEESWARM_OT_bake
+    reports = []
+
+    class Op:
+        _job = job
+        _timer = object()
+        modal = op_type.modal
+        _end_modal = op_type._end_modal
+        _complete = op_type._complete
+        _status = op_type._status
+        _fail = op_type._fail
+
+        def report(self, kind, msg):
+            reports.append((set(kind), msg))
+    return Op(), reports
+
+
+def start_modal(context, binary_path, fmt="USD", shot_path=""):
+    from blender_addon import operators
+    props = type("Props", (), {"format": fmt, "binary_path": binary_path, "shot_path": shot_path})()
+    job = operators.Job(context, props)
+    job.start()
+    operators._active["job"] = job
+    return job
+
+
+def Event(kind, value="NOTHING"):
+    return type("Event", (), {"type": kind, "value": value})()
+
+
+def drive(op, ctx, until, limit=60.0):
+    t = time.monotonic()
+    while time.monotonic() - t < limit:
+        r = op.modal(ctx, Event("TIMER"))
+        if r != {"RUNNING_MODAL"} or until():
+            return r
+        time.sleep(0.05)
+    raise AssertionError("the modal bake did not finish")
+
+
+def test_modal_bake_reports_progress_and_imports(scene, fake_bin):
+    wm, ws = FakeWM(), FakeWorkspace()
+    ctx = type("Ctx", (), {"scene": scene, "window_manager": wm, "workspace": ws,
+                           "view_layer": bpy.context.view_layer})()
+    job = start_modal(bpy.context, fake_bin)
+    op, reports = modal_operator(job)
+    assert op.modal(ctx, Event("MOUSEMOVE")) == {"PASS_THROUGH"}
+    assert drive(op, ctx, until=lambda: False) == {"FINISHED"}
+    assert any(isinstance(p, float) and 0 < p <= 100 for p in wm.progress)
+    assert wm.progress[-1] == "end" and ws.status[-1] is None
+    assert any(s and "frame" in s and "Esc" in s for s in ws.status)
+    assert len(shot_collections("bltest")) == 1
+    assert reports[-1][0] == {"INFO"}
+
+
+def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch):
+    from blender_addon import operators
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    before = sorted(o.name for o in bpy.data.objects if o.get(importer.SHOT_TAG) == "bltest")
+    cache = pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.usda"))
+    cached = cache.read_bytes()
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "slow")
+    scene.beeswarm.seed = 4
+    wm, ws = FakeWM(), FakeWorkspace()
+    ctx = type("Ctx", (), {"scene": scene, "window_manager": wm, "workspace": ws,
+                           "view_layer": bpy.context.view_layer})()
+    job = start_modal(bpy.context, fake_bin, "USD")
+    op, reports = modal_operator(job)
+    assert drive(op, ctx, until=lambda: any(isinstance(p, float) for p in wm.progress)) \
+        == {"RUNNING_MODAL"}, job.process.stderr
+    t = time.monotonic()
+    assert op.modal(ctx, Event("ESC", "PRESS")) == {"CANCELLED"}
+    assert time.monotonic() - t < 5
+    assert job.process.returncode is not None and job.process.returncode != 0
+    assert operators._active["job"] is None and wm.progress[-1] == "end"
+    assert reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
+    previous_swarm_intact("bltest", before)
+    assert cache.read_bytes() == cached
