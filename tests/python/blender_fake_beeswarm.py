@@ -64,10 +64,12 @@ def main(argv):
         if fmt == "csv":
             continue
         p = out / f"{name}.{fmt}"
-        if mode == "corrupt" or fmt != "usda":
+        if mode == "corrupt" or fmt not in ("usda", "glb"):
             p.write_bytes(b"\x00\x01 not a cache \xff" * 10)
-        else:
+        elif fmt == "usda":
             p.write_text(usda(name, sw.get("name", "bees"), fps, f0, f1, n, frames))
+        else:
+            p.write_bytes(glb(sw.get("name", "bees"), fps, f0, f1, n, frames))
         outputs.append(str(p.resolve()))
     print(json.dumps({"event": "done", "outputs": outputs}), flush=True)
     return 0
@@ -95,6 +97,54 @@ def usda(name, swarm, fps, f0, f1, n, frames):
               "            {", "                double size = 0.012", "            }", "        }",
               "    }", "}", ""]
     return "\n".join(lines)
+
+
+def glb(swarm, fps, f0, f1, n, frames):
+    """The real writer's layout, reduced: a root node per swarm, `bee_<id>` nodes moved by
+    LINEAR translation tracks on a shared time accessor (frame − start) / fps, each with a
+    `bee_<id>_body` child holding a one-triangle mesh."""
+    import struct
+    bin_ = bytearray()
+    views, accessors = [], []
+
+    def add(data, fmt, count, type_, extra=None):
+        while len(bin_) % 4:
+            bin_.append(0)
+        views.append({"buffer": 0, "byteOffset": len(bin_), "byteLength": len(data)})
+        bin_.extend(data)
+        acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": count, "type": type_}
+        acc.update(extra or {})
+        accessors.append(acc)
+        return len(accessors) - 1
+
+    tri = [0, 0, 0, 0.01, 0, 0, 0, 0.01, 0]
+    pos_acc = add(struct.pack("<9f", *tri), "f", 3, "VEC3", {"min": [0, 0, 0], "max": [0.01, 0.01, 0]})
+    times = [(f - f0) / fps for f in frames]
+    t_acc = add(struct.pack(f"<{len(times)}f", *times), "f", len(times), "SCALAR",
+                {"min": [min(times)], "max": [max(times)]})
+    nodes = [{"name": swarm, "children": []}]
+    channels, samplers = [], []
+    for i in range(n):
+        vals = [c for f in frames for c in frames[f][i][0]]
+        acc = add(struct.pack(f"<{len(vals)}f", *vals), "f", len(frames), "VEC3")
+        bee = len(nodes)
+        nodes[0]["children"].append(bee)
+        nodes.append({"name": f"bee_{i:06d}", "children": [bee + 1],
+                      "translation": list(frames[f0][i][0])})
+        nodes.append({"name": f"bee_{i:06d}_body", "mesh": 0})
+        samplers.append({"input": t_acc, "output": acc, "interpolation": "LINEAR"})
+        channels.append({"sampler": len(samplers) - 1, "target": {"node": bee, "path": "translation"}})
+    doc = {"asset": {"version": "2.0", "generator": "blender_fake_beeswarm"},
+           "scene": 0, "scenes": [{"nodes": [0]}], "nodes": nodes,
+           "meshes": [{"primitives": [{"attributes": {"POSITION": pos_acc}}]}],
+           "animations": [{"name": "swarm", "channels": channels, "samplers": samplers}],
+           "buffers": [{"byteLength": len(bin_)}], "bufferViews": views, "accessors": accessors}
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    bin_ += b"\0" * (-len(bin_) % 4)
+    total = 12 + 8 + len(js) + 8 + len(bin_)
+    return (struct.pack("<III", 0x46546C67, 2, total) + struct.pack("<II", len(js), 0x4E4F534A)
+            + js + struct.pack("<II", len(bin_), 0x004E4942) + bytes(bin_))
 
 
 if __name__ == "__main__":

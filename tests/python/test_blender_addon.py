@@ -6,6 +6,7 @@ Run with the venv that has bpy 5.0.1:
 import math
 import os
 import pathlib
+import re
 import stat
 import subprocess
 import sys
@@ -425,44 +426,51 @@ def test_usd_bake_imports_the_swarm_once_and_rebakes_in_place(scene, beeswarm_bi
     assert no_bee_inside(cyl, tracks2) > 0.0
 
 
-def gltf_bees(name):
-    """{bee index: object} for the imported glTF bees: the objects whose own animation
-    moves them (the writer's bee nodes)."""
-    coll = bpy.data.collections[name]
-    return [o for o in coll.all_objects if o.animation_data and o.animation_data.action]
+GLTF_BODY = re.compile(r"^bee_(\d+)_body$")
+
+
+def gltf_bodies(name):
+    """{bee id: object} for the imported glTF bees. The writer makes one node per bee,
+    `bee_<id>` (the path), with a child `bee_<id>_body` whose world transform is the
+    simulated pose: its world position is the tracks CSV position."""
+    out = {}
+    for o in bpy.data.collections[name].all_objects:
+        m = GLTF_BODY.match(o.name)
+        if m:
+            out[int(m.group(1))] = o
+    return out
+
+
+def gltf_positions(name, frame):
+    bpy.context.scene.frame_set(frame)
+    return {bee: o.matrix_world.translation.copy() for bee, o in gltf_bodies(name).items()}
 
 
 def test_gltf_bake_imports_the_swarm_once(scene, beeswarm_bin, tmp_path):
     cyl = shot_cylinder_scene(scene)
+    scene.frame_start, scene.frame_end = 3, 30
     t0 = time.monotonic()
     assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}
     print(f"glTF bake + import: {time.monotonic() - t0:.2f} s")
     cache_dir = tmp_path / "beeswarm_cache" / "bltest"
     assert (cache_dir / "bltest.glb").is_file()
     assert len(shot_collections("bltest")) == 1
-    assert (scene.render.fps, scene.frame_start, scene.frame_end) == (24, 1, 36)
+    assert (scene.render.fps, scene.frame_start, scene.frame_end) == (24, 3, 30)
     tracks = read_tracks(cache_dir / "bltest.tracks.csv")
-    bees = gltf_bees("bltest")
-    assert len(bees) == 40
-
-    def positions(frame):
-        scene.frame_set(frame)
-        out = {}
-        for o in bees:
-            bee = int(o.get("beeswarm_id", o.get("id", -1)))
-            out[bee] = o.matrix_world.translation.copy()
-        return out
-
-    check_swarm_against_csv("bltest", 40, positions, tracks, (1, 18, 36))
+    assert sorted(gltf_bodies("bltest")) == sorted(tracks)
+    check_swarm_against_csv("bltest", 40, lambda f: gltf_positions("bltest", f), tracks, (3, 17, 30))
     assert no_bee_inside(cyl, tracks) > 0.0
+
+    first = gltf_positions("bltest", 20)
     n_objects = len(bpy.data.objects)
     scene.beeswarm.seed = 5
     assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}
     assert len(shot_collections("bltest")) == 1 and len(bpy.data.objects) == n_objects
-    check_swarm_against_csv("bltest", 40, positions if False else (
-        lambda f: {int(o.get("beeswarm_id", o.get("id", -1))): (scene.frame_set(f) or o.matrix_world.translation.copy())
-                   for o in gltf_bees("bltest")}),
-        read_tracks(cache_dir / "bltest.tracks.csv"), (1, 36))
+    assert not [o for o in bpy.data.objects if o.name.startswith("~old") or ".00" in o.name]
+    tracks2 = read_tracks(cache_dir / "bltest.tracks.csv")
+    second = gltf_positions("bltest", 20)
+    assert max((first[b] - second[b]).length for b in first) > 1e-3
+    check_swarm_against_csv("bltest", 40, lambda f: gltf_positions("bltest", f), tracks2, (3, 30))
 
 
 # ---------------------------------------------------------------------------------------
