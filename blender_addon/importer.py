@@ -145,14 +145,22 @@ def align_gltf_time(actions, fps, frame_start):
             fc.update()
 
 
+def _supported(op, **kwargs):
+    """Only the options this Blender's importer has (4.2 lacks some of 5.0's)."""
+    props = op.get_rna_type().properties
+    return {k: v for k, v in kwargs.items() if k in props}
+
+
 def _import_file(path, fmt):
     if fmt == "USD":
-        result = bpy.ops.wm.usd_import(
-            filepath=path, set_frame_range=False, import_cameras=False, import_lights=False,
-            create_collection=False, relative_path=True, create_world_material=False,
-        )
+        op = bpy.ops.wm.usd_import
+        kwargs = _supported(op, set_frame_range=False, import_cameras=False,
+                            import_lights=False, create_collection=False, relative_path=True,
+                            create_world_material=False)
     else:
-        result = bpy.ops.import_scene.gltf(filepath=path, import_scene_as_collection=False)
+        op = bpy.ops.import_scene.gltf
+        kwargs = _supported(op, import_scene_as_collection=False, import_scene_extras=True)
+    result = op(filepath=path, **kwargs)
     if "FINISHED" not in result:
         raise ImportFailed(f"Blender could not import {os.path.basename(path)}")
 
