@@ -359,9 +359,14 @@ def usd_instances(name, frame):
     vel = np.zeros(n * 3, np.float32)
     geo.attributes["velocity"].data.foreach_get("vector", vel)
     vel = vel.reshape(n, 3)
-    positions = [inst_.matrix_world.translation.copy() for inst_ in dg.object_instances
-                 if inst_.is_instance and inst_.parent and inst_.parent.original == inst]
-    assert len(positions) == n
+    local = np.zeros(n * 3, np.float32)  # the instances' translations, instancer space
+    geo.attributes["position"].data.foreach_get("vector", local)
+    world = inst.evaluated_get(dg).matrix_world
+    positions = [world @ Vector(p) for p in local.reshape(n, 3)]
+    # Every prototype object of every instance is drawn: (body, wings…) × bees.
+    drawn = [i for i in dg.object_instances if i.is_instance and i.parent
+             and i.parent.original == inst]
+    assert len(drawn) % n == 0 and drawn
     return {int(i): (p, v) for i, p, v in zip(ids, positions, vel)}
 
 
@@ -623,8 +628,11 @@ class ProbeEngine(bpy.types.RenderEngine):
                 ip.attributes["velocity"].data.foreach_get("vector", v)
                 ids = np.zeros(n, np.int32)
                 ip.attributes["id"].data.foreach_get("value", ids)
-                pos = [tuple(i.matrix_world.translation) for i in depsgraph.object_instances
-                       if i.is_instance and i.parent and i.parent.name == ob.name]
+                # One prototype object per bee (the stand-in's prototype is one cube).
+                drawn = [(i.object.original.name, tuple(i.matrix_world.translation))
+                         for i in depsgraph.object_instances
+                         if i.is_instance and i.parent and i.parent.name == ob.name]
+                pos = [p for name, p in drawn if name == drawn[0][0]]
                 ProbeEngine.seen[key] = (ids, v.reshape(n, 3), np.array(pos))
 
     def render(self, depsgraph):
