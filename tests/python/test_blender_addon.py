@@ -795,3 +795,58 @@ def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch
     assert reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
     previous_swarm_intact("bltest", before)
     assert cache.read_bytes() == cached
+
+
+TWO_SWARMS = """
+[scene]
+name = "two"
+fps = 25
+frames = [1, 30]
+
+[[swarm]]
+name = "near"
+count = 15
+spawn = { shape = "box", center = [0.0, 1.0, 0.0], size = [0.5, 0.5, 0.5] }
+
+[[swarm]]
+name = "far"
+count = 25
+preset = "grassland"
+spawn = { shape = "sphere", center = [3.0, 1.0, 0.0], radius = 0.4 }
+
+[[obstacle]]
+type = "box"
+center = [1.5, 1.0, 0.0]
+size = [0.2, 2.0, 0.2]
+rotation = [0, 45, 0]
+"""
+
+
+def test_shot_file_with_two_swarms(scene, beeswarm_bin, tmp_path):
+    """A shot file (not the scene) with two swarms: its fps and range win, and each
+    instancer gets its own bees' ids and velocities."""
+    shot = tmp_path / "shots" / "two.toml"
+    shot.parent.mkdir()
+    shot.write_text(TWO_SWARMS)
+    assert run_bake(beeswarm_bin, "USD", shot_path=str(shot)) == {"FINISHED"}
+    assert (scene.render.fps, scene.frame_start, scene.frame_end) == (25, 1, 30)
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "two" / "two.tracks.csv")
+    coll = bpy.data.collections["two"]
+    instancers = {o.name: o for o in coll.all_objects if o.type == "POINTCLOUD"}
+    assert sorted(instancers) == ["far", "near"]
+    scene.frame_set(12)
+    dg = bpy.context.evaluated_depsgraph_get()
+    seen = {}
+    for name, ob in instancers.items():
+        gs = ob.evaluated_get(dg).evaluated_geometry()
+        ip = gs.instances_pointcloud()
+        n = len(ip.points)
+        ids = np.zeros(n, np.int32)
+        ip.attributes["id"].data.foreach_get("value", ids)
+        vel = np.zeros(n * 3, np.float32)
+        ip.attributes["velocity"].data.foreach_get("vector", vel)
+        seen[name] = n
+        for bee, v in zip(ids, vel.reshape(n, 3)):
+            row = tracks[int(bee)][12]
+            assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
+    assert seen == {"near": 15, "far": 25}
