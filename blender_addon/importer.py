@@ -4,6 +4,7 @@ import os
 import tomllib
 
 import bpy
+import numpy as np
 
 SHOT_TAG = "beeswarm_shot"  # ID property on every data-block an import created
 
@@ -138,11 +139,15 @@ def align_gltf_time(actions, fps, frame_start):
     k = fps / imported_rate
     for action in actions:
         for fc in _fcurves(action):
-            for kp in fc.keyframe_points:
-                for attr in ("co", "handle_left", "handle_right"):
-                    v = getattr(kp, attr)
-                    v.x = v.x * k + frame_start
-            fc.update()
+            kps = fc.keyframe_points
+            n = len(kps)
+            if not n:
+                continue
+            buf = np.empty(2 * n, dtype=np.float32)
+            kps.foreach_get("co", buf)
+            buf[0::2] = buf[0::2] * k + frame_start
+            kps.foreach_set("co", buf)
+            fc.update()  # sorts the keys and recomputes their handles
 
 
 def _supported(op, **kwargs):
