@@ -330,8 +330,12 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
             self.report({"WARNING"}, w)
         path = self.filepath or str((_blend_dir() or _temp_dir())
                                     / f"{shot['scene']['name']}.shot.toml")
-        path = bpy.path.abspath(path)
-        pathlib.Path(path).write_text(shot_builder.shot_toml(shot), encoding="utf-8")
+        path = pathlib.Path(bpy.path.abspath(path))
+        if path.exists() and not _written_by_addon(path):
+            self.report({"ERROR"}, f"{path} exists and was not written by the add-on")
+            return {"CANCELLED"}
+        source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
+        path.write_text(shot_builder.shot_toml(shot, source), encoding="utf-8")
         self.report({"INFO"}, f"Wrote {path}")
         return {"FINISHED"}
 

@@ -850,3 +850,17 @@ def test_shot_file_with_two_swarms(scene, beeswarm_bin, tmp_path):
             row = tracks[int(bee)][12]
             assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
     assert seen == {"near": 15, "far": 25}
+
+
+def test_write_shot_file_operator(scene, beeswarm_bin, tmp_path):
+    shot_cylinder_scene(scene)
+    assert bpy.ops.beeswarm.write_shot() == {"FINISHED"}
+    path = tmp_path / "bltest.shot.toml"
+    r = subprocess.run([beeswarm_bin, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert 'shot "bltest": ok' in r.stdout and "40 bees" in r.stdout
+    other = tmp_path / "theirs.toml"
+    other.write_text("[scene]\n")
+    with pytest.raises(RuntimeError, match="not written by the add-on"):
+        bpy.ops.beeswarm.write_shot(filepath=str(other))
+    assert other.read_text() == "[scene]\n"
