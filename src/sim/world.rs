@@ -160,7 +160,7 @@ impl Simulation {
                     wing_area: s.bee.wing_area,
                     mean_cl: oscillation::mean_lift_coefficient(),
                     curl: CurlNoise::new(
-                        math::mix64(shot.seed ^ (si as u64 + 1) * 0x51ED),
+                        math::mix64(shot.seed ^ ((si as u64 + 1) * 0x51ED)),
                         p.noise_cell,
                         p.noise_gain,
                     ),
