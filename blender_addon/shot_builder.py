@@ -41,7 +41,7 @@ def rotation_to_shot_euler(rot3):
     """A Blender world rotation (3x3) → the shot's Euler XYZ degrees."""
     r = C @ rot3 @ C_INV
     e = r.to_euler("XYZ")
-    return [_clean(math.degrees(a)) for a in e]
+    return [_clean(math.degrees(a), 1e-6) for a in e]
 
 
 def _clean(x, eps=1e-9):

@@ -5,6 +5,8 @@ lists or as `[section]` / `[[array]]` tables at the top level.
 """
 import math
 
+import numpy as np
+
 
 def _key(k):
     if k and all(c.isalnum() or c in "_-" for c in k):
@@ -32,13 +34,18 @@ def _string(s):
 
 
 def _float(x):
+    """The shortest text that reads back as the same float32: Blender's values are float32,
+    so 0.8 is written, not 0.800000011920929."""
     if not math.isfinite(x):
         raise ValueError(f"cannot write a non-finite number ({x}) to a shot file")
-    x = float(x)
-    if x == 0.0:
+    x32 = np.float32(x)
+    if x32 == 0:
         return "0.0"
-    text = repr(round(x, 9))  # metres: a nanometre is plenty, and keeps the file readable
-    if "e" not in text and "." not in text and "inf" not in text:
+    if 1e-4 <= abs(x32) < 1e7:
+        text = np.format_float_positional(x32, unique=True, trim="-")
+    else:
+        text = np.format_float_scientific(x32, unique=True, trim="-")
+    if not any(c in text for c in ".eE"):
         text += ".0"
     return text
 
