@@ -739,19 +739,16 @@ impl Layout {
                     let z = if right { set.hinge_r.z } else { -set.hinge_r.z };
                     [set.hinge_r.x, set.hinge_r.y, z]
                 };
-                let wing_l = root.push(json::Node {
-                    mesh: Some(set.wing_l),
-                    translation: Some(hinge(false)),
-                    rotation: Some(wing_pose(false)),
-                    ..node(format!("{name}_wing_l"))
+                // Parents before children in the node list, so the document reads top-down.
+                let at = |k: usize| Index::<json::Node>::new((root.nodes.len() + k) as u32);
+                let (bee, body, wing_l, wing_r) = (at(0), at(1), at(2), at(3));
+                root.push(json::Node {
+                    children: Some(vec![body]),
+                    translation: Some([f[0], f[1], f[2]]),
+                    rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
+                    ..node(name.clone())
                 });
-                let wing_r = root.push(json::Node {
-                    mesh: Some(set.wing_r),
-                    translation: Some(hinge(true)),
-                    rotation: Some(wing_pose(true)),
-                    ..node(format!("{name}_wing_r"))
-                });
-                let body = root.push(json::Node {
+                root.push(json::Node {
                     mesh: Some(set.body),
                     children: Some(vec![wing_l, wing_r]),
                     translation: Some([0.0, 0.0, f[7]]),
@@ -759,11 +756,17 @@ impl Layout {
                     scale: (f[12] != 1.0).then_some([f[12]; 3]),
                     ..node(format!("{name}_body"))
                 });
-                let bee = root.push(json::Node {
-                    children: Some(vec![body]),
-                    translation: Some([f[0], f[1], f[2]]),
-                    rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
-                    ..node(name)
+                root.push(json::Node {
+                    mesh: Some(set.wing_l),
+                    translation: Some(hinge(false)),
+                    rotation: Some(wing_pose(false)),
+                    ..node(format!("{name}_wing_l"))
+                });
+                root.push(json::Node {
+                    mesh: Some(set.wing_r),
+                    translation: Some(hinge(true)),
+                    rotation: Some(wing_pose(true)),
+                    ..node(format!("{name}_wing_r"))
                 });
                 children.push(bee);
                 track(&mut samplers, &mut channels, bee, bee_t, Translation);
