@@ -174,13 +174,15 @@ out["key_range"] = [key_frames[0], key_frames[-1]]
 scene.frame_start = 0
 scene.frame_end = frames[1] - frames[0]
 out["scene_range"] = [scene.frame_start, scene.frame_end]
+bee = bpy.data.objects[out["bees"][0]]
 body = bpy.data.objects[out["bees"][0] + "_body"]
+out["body_parent"] = body.parent.name
 poses = {}
 for f in (frames[0], (frames[0] + frames[1]) // 2, frames[1]):
     scene.frame_set(f - frames[0])
     m = body.matrix_world
     q = m.to_quaternion()
-    poses[f] = {"p": list(m.translation), "q": [q.w, q.x, q.y, q.z]}
+    poses[f] = {"p": list(m.translation), "q": [q.w, q.x, q.y, q.z], "path": list(bee.matrix_world.translation)}
 out["poses"] = poses
 print("RESULT " + json.dumps(out))
 """
@@ -222,6 +224,7 @@ def test_blender_import_reproduces_the_tracks(baked, fmt):
     assert got["scene_range"] == [0, FRAMES[1] - FRAMES[0]]
 
     bee = int(got["bees"][0][4:])
+    assert got["body_parent"] == got["bees"][0]
     # Y-up → Z-up on import: (x, y, z) → (x, -z, y), which is c = +90° about X; points and
     # body axes both turn, so a world rotation q becomes c·q·c⁻¹.
     c = (0.5 ** 0.5, 0.5 ** 0.5, 0.0, 0.0)
@@ -233,3 +236,7 @@ def test_blender_import_reproduces_the_tracks(baked, fmt):
         q = quat_mul(quat_mul(c, (row["qw"], row["qx"], row["qy"], row["qz"])), c_inv)
         dot = abs(sum(a * b for a, b in zip(q, pose["q"])))
         assert dot == pytest.approx(1.0, abs=1e-5), f"frame {f}: {pose['q']} vs {q}"
+        # The bee (path) node sits off the body by exactly the sway.
+        off = sum((a - b) ** 2 for a, b in zip(pose["p"], pose["path"])) ** 0.5
+        assert off == pytest.approx(abs(row["sway"]), abs=1e-5), f"frame {f}"
+    assert any(abs(tracks[bee][int(f)]["sway"]) > 1e-3 for f in got["poses"]), "sway untested"

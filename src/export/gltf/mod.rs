@@ -62,7 +62,7 @@ const WING_ALPHA_BLUR: f32 = 0.18;
 const RECORD_FLOATS: usize = 13;
 const RECORD_BYTES: usize = RECORD_FLOATS * 4;
 /// Upper bound of the transpose block at `finish`.
-const TRANSPOSE_BUDGET_BYTES: usize = 64 << 20;
+const TRANSPOSE_BUDGET_BYTES: usize = 16 << 20;
 
 const F32: json::accessor::ComponentType = json::accessor::ComponentType::F32;
 

@@ -686,3 +686,54 @@ fn khronos_validator_reports_no_errors_or_warnings() {
         }
     }
 }
+
+/// Writer-only timing and memory on synthetic frames (the simulation excluded):
+/// `BEESWARM_PERF_BEES=10000 cargo test --release --lib gltf_writer_throughput -- --ignored
+/// --nocapture`, under `/usr/bin/time -v` for the peak memory.
+#[test]
+#[ignore]
+fn gltf_writer_throughput() {
+    let bees: usize = std::env::var("BEESWARM_PERF_BEES").map_or(1000, |v| v.parse().unwrap());
+    let frames = 240;
+    let dir = tempfile::tempdir().unwrap();
+    let m = meta(&[("bees", bees, 0.012)], 1, frames);
+    for container in [Container::Glb, Container::Gltf] {
+        let ext = if container == Container::Glb {
+            "glb"
+        } else {
+            "gltf"
+        };
+        let path = dir.path().join(format!("perf.{ext}"));
+        let mut w: Box<dyn CacheWriter> =
+            Box::new(GltfWriter::create(container, &path, &m, &opts(0.0)).unwrap());
+        let mut in_frames = std::time::Duration::ZERO;
+        for f in 1..=frames {
+            let s = synth(&m, f, false);
+            let t = std::time::Instant::now();
+            w.write_frame(&Frame {
+                frame: f,
+                time: 0.0,
+                swarms: &s,
+            })
+            .unwrap();
+            in_frames += t.elapsed();
+        }
+        let t = std::time::Instant::now();
+        let paths = w.finish().unwrap();
+        let finish = t.elapsed();
+        let size: u64 = paths
+            .iter()
+            .map(|p| std::fs::metadata(p).unwrap().len())
+            .sum();
+        eprintln!(
+            "{bees} bees x {frames} frames .{ext}: {:.1} MB, write_frame total {:.2} s, \
+             finish {:.2} s",
+            size as f64 / 1e6,
+            in_frames.as_secs_f64(),
+            finish.as_secs_f64()
+        );
+        for p in paths {
+            std::fs::remove_file(p).unwrap();
+        }
+    }
+}
