@@ -17,8 +17,8 @@
 //!
 //! Memory: the buffer wants each bee's history contiguous (node-major) but frames arrive
 //! one at a time (frame-major). Each frame's keys are appended to a scratch file as they
-//! come and transposed in blocks of bees at `finish`, so memory is a few dozen bytes per
-//! bee plus one bounded block buffer, whatever the shot length. The JSON (about 1.5 kB per
+//! come and transposed in blocks of bees at `finish`, so memory is about 100 bytes per bee
+//! plus one bounded block buffer, whatever the shot length. The JSON (about 1.5 kB per
 //! bee) is the part that grows with the bee count.
 
 mod mesh;
@@ -46,7 +46,7 @@ pub enum Container {
     Gltf,
 }
 
-/// Wing stroke, radians: the wing swings about the body X axis (the hinge line) by
+/// Wing stroke, degrees: the wing swings about the body X axis (the hinge line) by
 /// `WING_MID ± WING_AMPLITUDE`, positive raising the tip. The blurred pose is `WING_MID`.
 const WING_MID_DEG: f32 = 15.0;
 const WING_AMPLITUDE_DEG: f32 = 50.0;
@@ -172,6 +172,15 @@ impl GltfWriter {
         }
         if meta.frame_end < meta.frame_start {
             return Err(Error::input("the frame range is empty"));
+        }
+        // Keys are f32 seconds; a very long shot at a high rate could round two frames to
+        // the same time, which glTF forbids (times must strictly increase).
+        if key_times(meta).windows(2).any(|t| t[1] <= t[0]) {
+            return Err(Error::input(format!(
+                "frames {}..={} at {} fps are too many for glTF's f32 key times; \
+                 split the shot or use usda",
+                meta.frame_start, meta.frame_end, meta.fps
+            )));
         }
         for s in &meta.swarms {
             if !(s.bee_length_m.is_finite() && s.bee_length_m > 0.0) {

@@ -737,3 +737,15 @@ fn gltf_writer_throughput() {
         }
     }
 }
+
+#[test]
+fn a_range_too_long_for_f32_key_times_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // Past 2 s the f32 spacing (0.24 µs) exceeds a frame at 5 MHz (0.2 µs): keys collide.
+    let mut m = meta(&[("bees", 1, 0.012)], 0, 10_500_000);
+    m.fps = 5e6;
+    let err = GltfWriter::create(Container::Glb, &dir.path().join("a.glb"), &m, &opts(0.0));
+    assert!(matches!(err, Err(Error::Input(_))));
+    m.frame_end = 1_000;
+    assert!(GltfWriter::create(Container::Glb, &dir.path().join("a.glb"), &m, &opts(0.0)).is_ok());
+}
