@@ -240,3 +240,34 @@ def test_blender_import_reproduces_the_tracks(baked, fmt):
         off = sum((a - b) ** 2 for a, b in zip(pose["p"], pose["path"])) ** 0.5
         assert off == pytest.approx(abs(row["sway"]), abs=1e-5), f"frame {f}"
     assert any(abs(tracks[bee][int(f)]["sway"]) > 1e-3 for f in got["poses"]), "sway untested"
+
+
+def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
+    """SIGINT mid-bake: the previous .glb/.gltf/.bin stay byte-identical, nothing is left behind."""
+    import signal
+
+    out = tmp_path
+    bake(beeswarm_bin, SHOT.replace("@FLAP@", "0"), out)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".glb", ".gltf", ".bin")}
+    assert len(before) == 3
+    # A longer, bigger bake of the same shot name, stopped after its first frame.
+    shot = out / "long.toml"
+    shot.write_text(
+        SHOT.replace("@FLAP@", "0")
+        .replace(f"count = {BEES}", "count = 3000")
+        .replace(f"frames = [{FRAMES[0]}, {FRAMES[1]}]", "frames = [1, 2400]")
+    )
+    proc = subprocess.Popen(
+        [beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    for line in proc.stdout:
+        if '"progress"' in line:
+            break
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err  # a clean, reported stop, not a kill
+    assert "interrupted" in err
+    after = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".glb", ".gltf", ".bin")}
+    assert after == before
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
