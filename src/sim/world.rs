@@ -18,7 +18,7 @@ use rayon::prelude::*;
 /// velocity (a short lag lets a pushed-back bee fly backwards briefly, as real bees do),
 /// how fast the roll reaches its target, and the smoothing of the mean path for sway.
 const YAW_LAG_S: f32 = 0.06;
-const ROLL_LAG_S: f32 = 0.08;
+const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
 
 /// Per-step blend factors 1 − exp(−dt/τ) of the first-order lags above.
@@ -160,7 +160,7 @@ impl Simulation {
                     wing_area: s.bee.wing_area,
                     mean_cl: oscillation::mean_lift_coefficient(),
                     curl: CurlNoise::new(
-                        math::mix64(shot.seed ^ (si as u64 + 1) * 0x51ED),
+                        math::mix64(shot.seed ^ ((si as u64 + 1) * 0x51ED)),
                         p.noise_cell,
                         p.noise_gain,
                     ),
@@ -301,6 +301,12 @@ impl Simulation {
         b.pos = position;
         b.vel = velocity;
         b.mean_pos = position;
+        // The heading follows the new direction of travel at once.
+        let horizontal = Vec3::new(velocity.x, 0.0, velocity.z);
+        if horizontal.length() > 0.02 {
+            b.yaw = math::yaw_of(horizontal);
+        }
+        b.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
         self.update_record();
     }
 
