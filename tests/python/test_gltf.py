@@ -44,7 +44,7 @@ SHOT = textwrap.dedent(
     position = [0.0, 1.0, 0.0]
 
     [output]
-    formats = ["glb", "gltf", "csv"]
+    formats = ["glb"]
     wing_flap_hz = @FLAP@
     """
 )
@@ -63,8 +63,7 @@ def baked(request, beeswarm_bin, tmp_path_factory):
     """One bake per wing mode: {format: path}."""
     flap = request.param
     out = tmp_path_factory.mktemp(f"gltf_flap{flap}")
-    # The formats come from the shot's [output] table (the same as `--format glb,gltf,csv`).
-    bake(beeswarm_bin, SHOT.replace("@FLAP@", str(flap)), out)
+    bake(beeswarm_bin, SHOT.replace("@FLAP@", str(flap)), out, "--format", "glb,gltf,csv")
     files = {
         "glb": out / "gltf_test.glb",
         "gltf": out / "gltf_test.gltf",
@@ -247,7 +246,7 @@ def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
     import signal
 
     out = tmp_path
-    bake(beeswarm_bin, SHOT.replace("@FLAP@", "0"), out)
+    bake(beeswarm_bin, SHOT.replace("@FLAP@", "0"), out, "--format", "glb,gltf")
     before = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".glb", ".gltf", ".bin")}
     assert len(before) == 3
     # A longer, bigger bake of the same shot name, stopped after its first frame.
@@ -258,7 +257,8 @@ def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
         .replace(f"frames = [{FRAMES[0]}, {FRAMES[1]}]", "frames = [1, 2400]")
     )
     proc = subprocess.Popen(
-        [beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json"],
+        [beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json",
+         "--format", "glb,gltf"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     for line in proc.stdout:
