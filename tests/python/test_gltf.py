@@ -271,3 +271,9 @@ def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
     after = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".glb", ".gltf", ".bin")}
     assert after == before
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+
+
+def test_identical_bakes_are_byte_identical(baked, beeswarm_bin, tmp_path):
+    bake(beeswarm_bin, SHOT.replace("@FLAP@", str(baked["flap"])), tmp_path, "--format", "glb,gltf")
+    for name in ("gltf_test.glb", "gltf_test.gltf", "gltf_test.bin"):
+        assert (tmp_path / name).read_bytes() == (baked["dir"] / name).read_bytes(), name
