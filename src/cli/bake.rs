@@ -20,13 +20,13 @@ pub struct BakeArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Comma-separated formats: glb, gltf, usda, csv (default: the shot's, else glb,usda).
-    #[arg(long, value_parser = super::parse_formats)]
+    #[arg(long, value_delimiter = ',', value_parser = super::parse_format)]
     pub format: Option<Vec<Format>>,
     /// Override the shot's seed.
     #[arg(long)]
     pub seed: Option<u64>,
     /// Override the frame range, START:END inclusive.
-    #[arg(long, value_parser = super::parse_frames)]
+    #[arg(long, value_parser = super::parse_frames, allow_hyphen_values = true)]
     pub frames: Option<(i32, i32)>,
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, default_value_t = 0)]
@@ -55,10 +55,18 @@ pub fn run(a: BakeArgs) -> Result<()> {
         shot.frame_end = e;
     }
     let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
-    let formats = a
-        .format
-        .clone()
-        .unwrap_or_else(|| shot.output.formats.clone());
+    let formats = match &a.format {
+        Some(list) => {
+            let mut unique: Vec<Format> = Vec::new();
+            for f in list {
+                if !unique.contains(f) {
+                    unique.push(*f);
+                }
+            }
+            unique
+        }
+        None => shot.output.formats.clone(),
+    };
     let opts = BakeOptions {
         out_dir: &out_dir,
         formats: &formats,
