@@ -43,15 +43,21 @@ impl AtomicFile {
         self.writer.as_mut().expect("writer present until commit")
     }
 
-    /// Flushes, syncs and renames onto the destination.
+    /// Flushes, syncs and renames onto the destination. On failure the temporary file is
+    /// removed (Drop no longer sees a writer, so it would not).
     pub fn commit(mut self) -> Result<PathBuf> {
         let w = self.writer.take().expect("writer present until commit");
-        let file = w
+        let result = w
             .into_inner()
-            .map_err(|e| Error::io(&self.tmp, e.into_error()))?;
-        file.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
-        drop(file);
-        std::fs::rename(&self.tmp, &self.dest).map_err(|e| Error::io(&self.dest, e))?;
+            .map_err(|e| Error::io(&self.tmp, e.into_error()))
+            .and_then(|file| file.sync_all().map_err(|e| Error::io(&self.tmp, e)))
+            .and_then(|()| {
+                std::fs::rename(&self.tmp, &self.dest).map_err(|e| Error::io(&self.dest, e))
+            });
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&self.tmp);
+            return Err(e);
+        }
         Ok(std::mem::take(&mut self.dest))
     }
 }
@@ -110,6 +116,19 @@ mod tests {
             f.write_all(b"new partial").unwrap();
         } // dropped without commit: an interrupted bake
         assert_eq!(std::fs::read_to_string(&dest).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn failed_commit_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        // A folder where the file should go: the rename fails.
+        let dest = dir.path().join("a.txt");
+        std::fs::create_dir(&dest).unwrap();
+        let mut f = AtomicFile::create(&dest).unwrap();
+        f.write_all(b"new").unwrap();
+        assert!(f.commit().is_err());
+        assert!(dest.is_dir());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
