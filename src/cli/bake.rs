@@ -21,7 +21,7 @@ pub struct BakeArgs {
     pub out: Option<PathBuf>,
     /// Comma-separated formats: glb, gltf, usda, csv (default: the shot's, else glb,usda).
     #[arg(long, value_delimiter = ',', value_parser = super::parse_format)]
-    pub format: Option<Vec<Format>>,
+    pub format: Vec<Format>,
     /// Override the shot's seed.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -55,17 +55,17 @@ pub fn run(a: BakeArgs) -> Result<()> {
         shot.frame_end = e;
     }
     let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
-    let formats = match &a.format {
-        Some(list) => {
-            let mut unique: Vec<Format> = Vec::new();
-            for f in list {
-                if !unique.contains(f) {
-                    unique.push(*f);
-                }
+    let formats = if a.format.is_empty() {
+        shot.output.formats.clone()
+    } else {
+        // `--format csv,CSV` names one writer, not two writing the same file.
+        let mut unique: Vec<Format> = Vec::new();
+        for f in &a.format {
+            if !unique.contains(f) {
+                unique.push(*f);
             }
-            unique
         }
-        None => shot.output.formats.clone(),
+        unique
     };
     let opts = BakeOptions {
         out_dir: &out_dir,

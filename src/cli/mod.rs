@@ -79,9 +79,6 @@ pub fn parse_frames(s: &str) -> Result<(i32, i32), String> {
 }
 
 /// Parses one format name; clap splits `--format glb,csv` at the commas.
-///
-/// (A parser returning `Vec<Format>` for an `Option<Vec<Format>>` field makes clap panic
-/// on every valid `--format`: clap collects one value per item of the Vec.)
 pub fn parse_format(s: &str) -> Result<crate::export::Format, String> {
     crate::export::Format::parse(s).ok_or_else(|| {
         format!(

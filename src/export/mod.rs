@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod gltf;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -96,6 +97,18 @@ pub fn open_writer(
     let path = dir.join(format.file_name(&meta.shot_name));
     match format {
         Format::Csv => Ok(Box::new(csv::CsvWriter::create(&path, meta)?)),
+        Format::Glb => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Glb,
+            &path,
+            meta,
+            opts,
+        )?)),
+        Format::Gltf => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Gltf,
+            &path,
+            meta,
+            opts,
+        )?)),
         other => Err(Error::bake(format!(
             "the {} writer is not available in this build",
             other.name()
