@@ -390,6 +390,32 @@ fn spawn_region_inside_an_obstacle() {
 }
 
 #[test]
+fn a_key_of_the_other_spawn_shape() {
+    // `radius` without `shape = "sphere"` would otherwise be ignored for the default box.
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { center = [0, 1, 0], radius = 0.5 }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:40:",
+            "key `swarm[0].spawn.radius`",
+            "a box spawn region has no `radius`",
+            "hint: a box takes center and size; for a sphere write shape = \"sphere\"",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[swarm.spawn]\nshape = \"sphere\"\nradius = 0.5\nsize = [1, 1, 1]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:8:",
+            "key `swarm[0].spawn.size`",
+            "a sphere spawn region has no `size`",
+        ],
+    );
+}
+
+#[test]
 fn values_out_of_range_say_the_range() {
     let err = refuse("[[swarm]]\ncount = 3\nparams = { kappa1 = 200 }\n");
     assert_says(

@@ -583,11 +583,30 @@ fn resolve_swarm(
 
     let rsp = rs.spawn.clone().unwrap_or_default();
     let center = cx.vec(&k("spawn.center"), rsp.center.unwrap_or(d::SPAWN_CENTER))?;
-    let spawn = match cx.one_of(
+    let shape = cx.one_of(
         &k("spawn.shape"),
         rsp.shape.as_deref().unwrap_or("box"),
         &["box", "sphere"],
-    )? {
+    )?;
+    // A key of the other shape would be silently ignored: say so instead.
+    let (stray, hint) = match shape {
+        "box" => (
+            rsp.radius.map(|_| "radius"),
+            "a box takes center and size; for a sphere write shape = \"sphere\"",
+        ),
+        _ => (
+            rsp.size.map(|_| "size"),
+            "a sphere takes center and radius; for a box write shape = \"box\"",
+        ),
+    };
+    if let Some(key) = stray {
+        return Err(cx.hint(
+            &k(&format!("spawn.{key}")),
+            format!("a {shape} spawn region has no `{key}`"),
+            hint,
+        ));
+    }
+    let spawn = match shape {
         "box" => Region::Box {
             center,
             half: cx.size(&k("spawn.size"), rsp.size.unwrap_or(d::SPAWN_SIZE))? * 0.5,
