@@ -149,3 +149,60 @@ fn every_example_bakes_to_complete_finite_tracks() {
         println!("{file}: {bees} bees × {frames} frames baked");
     }
 }
+
+/// The ```toml blocks of a Markdown file.
+fn toml_blocks(markdown: &str) -> Vec<String> {
+    let mut blocks = Vec::new();
+    let mut current: Option<String> = None;
+    for line in markdown.lines() {
+        match (&mut current, line.trim_end()) {
+            (None, "```toml") => current = Some(String::new()),
+            (Some(b), "```") => {
+                blocks.push(std::mem::take(b));
+                current = None;
+            }
+            (Some(b), l) => {
+                b.push_str(l);
+                b.push('\n');
+            }
+            _ => {}
+        }
+    }
+    blocks
+}
+
+#[test]
+fn every_shot_in_the_docs_is_valid() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    for doc in ["docs/shot-format.md", "README.md"] {
+        let Ok(text) = std::fs::read_to_string(root.join(doc)) else {
+            continue;
+        };
+        let blocks = toml_blocks(&text);
+        // A preset file in the docs is written beside the shots, as the docs name it.
+        for b in blocks.iter().filter(|b| b.contains("[preset]")) {
+            std::fs::write(dir.path().join("meadow.toml"), b).unwrap();
+        }
+        let mut shots = 0;
+        for b in blocks.iter().filter(|b| b.contains("[[swarm]]")) {
+            let path = dir.path().join("doc_shot.toml");
+            std::fs::write(&path, b).unwrap();
+            beeswarm::shot::load(&path)
+                .unwrap_or_else(|e| panic!("a shot in {doc} is invalid:\n{e}\n\n{b}"));
+            shots += 1;
+        }
+        if doc == "docs/shot-format.md" {
+            assert!(shots >= 2, "{doc}: the minimal and the complete example");
+            // The preset file shown there works as a preset.
+            std::fs::write(
+                dir.path().join("uses_preset.toml"),
+                "[[swarm]]\ncount = 3\npreset = \"meadow.toml\"\n",
+            )
+            .unwrap();
+            let shot = beeswarm::shot::load(&dir.path().join("uses_preset.toml"))
+                .unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(shot.swarms[0].preset, "meadow.toml");
+        }
+    }
+}
