@@ -669,3 +669,34 @@ fn good_arguments_are_accepted() {
     assert_eq!(frames.len(), 3 * 4);
     assert_eq!((frames[0], frames[frames.len() - 1]), ("-2", "1"));
 }
+
+#[test]
+fn bad_bench_options_name_the_option() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, says) in [
+        (
+            &["--substeps", "0"][..],
+            "error: --substeps: expected a whole number of substeps from 1 to 64, found 0",
+        ),
+        (
+            &["--preset", "meadow"][..],
+            "error: --preset: expected one of \"grassland\", \"nest\", \"optimized\"",
+        ),
+        (
+            &["--frames", "200000"][..],
+            "error: --frames: expected at most 100000 frames",
+        ),
+    ] {
+        let mut all = vec!["bench", "--bees", "10"];
+        all.extend_from_slice(args);
+        if !args.contains(&"--frames") {
+            all.extend_from_slice(&["--frames", "2"]);
+        }
+        let run = beeswarm(dir.path(), &all);
+        assert_eq!(run.code, 2, "{args:?}: {}", run.stderr);
+        assert_says(&run.stderr, &[says]);
+        assert!(!run.stderr.contains("<bench>"), "{}", run.stderr);
+        assert_eq!(run.stdout, "", "no measurement printed");
+    }
+    assert_only(dir.path(), &[]);
+}
