@@ -700,3 +700,36 @@ fn bad_bench_options_name_the_option() {
     }
     assert_only(dir.path(), &[]);
 }
+
+#[test]
+fn a_file_name_that_cannot_name_the_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("my shot.toml"), "[[swarm]]\ncount = 3\n").unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "my shot.toml", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &[
+            "error: my shot.toml: key `scene.name`",
+            "the shot is named after its file, \"my shot\"",
+            "hint: name it in the shot: [scene] name = \"my_shot\"",
+        ],
+    );
+    assert_only(dir.path(), &["my shot.toml"]);
+}
+
+#[test]
+fn wing_flap_above_half_the_frame_rate() {
+    let err = refuse("[scene]\nfps = 30\n[[swarm]]\ncount = 3\n[output]\nwing_flap_hz = 20\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:16:",
+            "key `output.wing_flap_hz`",
+            "up to half the frame rate (15 Hz at 30 fps), found 20",
+        ],
+    );
+}

@@ -231,6 +231,28 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             .all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
         || name.starts_with('.')
     {
+        if scene.name.is_none() {
+            // The name came from the file name: say so, and suggest one to write.
+            let safe: String = name
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || "_-.".contains(c) {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            let safe = safe.trim_start_matches('.');
+            let safe = if safe.is_empty() { d::SHOT_NAME } else { safe };
+            return Err(cx.hint(
+                "scene.name",
+                format!(
+                    "the shot is named after its file, \"{name}\", which is not a file-safe name (letters, digits, _ - .)"
+                ),
+                format!("name it in the shot: [scene] name = \"{safe}\", or rename the file"),
+            ));
+        }
         return Err(cx.hint(
             "scene.name",
             format!("expected a file-safe name (letters, digits, _ - .), found \"{name}\""),
@@ -338,7 +360,10 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         ro.wing_flap_hz.unwrap_or(d::WING_FLAP_HZ),
         0.0,
         fps / 2.0,
-        "a visible flap rate from 0 (blurred) up to half the frame rate",
+        &format!(
+            "a visible flap rate from 0 (blurred) up to half the frame rate ({} Hz at {fps} fps)",
+            fps / 2.0
+        ),
     )?;
     let clip = ro.usda_clip_frames.unwrap_or(d::USDA_CLIP_FRAMES);
     let usda_clip_frames = cx.range(
