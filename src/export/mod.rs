@@ -93,7 +93,6 @@ pub fn open_writer(
     dir: &Path,
     opts: &OutputOptions,
 ) -> Result<Box<dyn CacheWriter>> {
-    let _ = opts;
     let path = dir.join(format.file_name(&meta.shot_name));
     match format {
         Format::Csv => Ok(Box::new(csv::CsvWriter::create(&path, meta)?)),
