@@ -146,6 +146,14 @@ fn a_folder_given_as_the_shot() {
     let run = beeswarm(dir.path(), &["check", "shots"]);
     assert_eq!(run.code, 2);
     assert_says(&run.stderr, &["shots: this is a folder, not a shot file"]);
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "shots", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["shots: this is a folder, not a shot file"]);
+    assert_only(dir.path(), &[]);
+    assert!(!dir.path().join("out").exists());
 }
 
 #[test]
