@@ -92,6 +92,7 @@ fn refuse(src: impl AsRef<[u8]>) -> String {
     assert_eq!(check.stderr, bake.stderr, "check and bake report alike");
     assert_eq!(check.stdout, "", "check prints no summary for a bad shot");
     assert_only(dir.path(), &["shot.toml"]);
+    assert!(!dir.path().join("out").exists(), "not even the folder");
     bake.stderr
 }
 
