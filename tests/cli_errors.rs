@@ -548,9 +548,18 @@ fn output_folder_under_a_regular_file() {
     assert_says(
         &run.stderr,
         &[
-            "cannot create the output folder notes.txt/caches",
-            "Not a directory",
+            "error: cannot create the output folder notes.txt/caches (--out): notes.txt is a file, not a folder",
         ],
+    );
+    // The file itself as the folder.
+    let run = beeswarm(
+        p,
+        &["bake", "shot.toml", "--out", "notes.txt", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &["error: the output folder notes.txt (--out) is a file, not a folder"],
     );
     // The same folder given by the shot's [output] dir.
     std::fs::write(
@@ -560,7 +569,10 @@ fn output_folder_under_a_regular_file() {
     .unwrap();
     let run = beeswarm(p, &["bake", "shot.toml"]);
     assert_eq!(run.code, 2, "{}", run.stderr);
-    assert_says(&run.stderr, &["notes.txt/caches", "Not a directory"]);
+    assert_says(
+        &run.stderr,
+        &["notes.txt/caches (the shot's [output] dir): notes.txt is a file, not a folder"],
+    );
     assert_only(p, &["shot.toml", "notes.txt"]);
     assert_eq!(
         std::fs::read_to_string(p.join("notes.txt")).unwrap(),
