@@ -599,11 +599,40 @@ fn a_failure_while_baking_exits_1_and_leaves_no_file() {
     );
     assert_says(
         &run.stderr,
-        &["error: cannot write out/shot.tracks.csv", "Is a directory"],
+        &[
+            "error: cannot write out/shot.tracks.csv",
+            "a folder stands there",
+        ],
     );
     assert!(p.join("out/shot.tracks.csv").is_dir());
     // No temporary file left behind either.
     assert_only(p, &["shot.toml"]);
+}
+
+#[test]
+fn a_failure_in_one_format_leaves_every_previous_cache_untouched() {
+    // The previous CSV cache exists; a folder blocks the glb. Nothing may be replaced,
+    // not even the CSV that could have been written.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 4]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    std::fs::create_dir_all(p.join("out/shot.glb")).unwrap();
+    std::fs::write(p.join("out/shot.tracks.csv"), "previous cache").unwrap();
+    let run = beeswarm(
+        p,
+        &["bake", "shot.toml", "--out", "out", "--format", "csv,glb"],
+    );
+    assert_eq!(run.code, 1, "{}", run.stderr);
+    assert_says(&run.stderr, &["cannot write out/shot.glb"]);
+    assert_eq!(
+        std::fs::read_to_string(p.join("out/shot.tracks.csv")).unwrap(),
+        "previous cache"
+    );
+    assert_only(p, &["shot.toml", "out/shot.tracks.csv"]);
 }
 
 /// Bakes a good shot with `args` appended; returns the run and the folder.

@@ -10,7 +10,7 @@ pub mod gltf;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A cache format the bake can write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -70,8 +70,10 @@ impl Default for OutputOptions {
 pub trait CacheWriter: Send {
     /// Called once per frame, in frame order, for every frame of the range.
     fn write_frame(&mut self, frame: &Frame) -> Result<()>;
-    /// Completes the files, renames them into place and returns their paths.
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>>;
+    /// Completes the files and returns them sealed under temporary names, in the order
+    /// they must be renamed into place (the bake renames them only once every writer has
+    /// sealed, so a failure in any format leaves every previous cache untouched).
+    fn finish(self: Box<Self>) -> Result<Vec<atomic::SealedFile>>;
 }
 
 /// Opens the preview writer (`<name>.preview.png`, a plot of the trajectories).
