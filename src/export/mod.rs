@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod usda;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -84,6 +85,11 @@ pub fn open_writer(
     let path = dir.join(format.file_name(&meta.shot_name));
     match format {
         Format::Csv => Ok(Box::new(csv::CsvWriter::create(&path, meta)?)),
+        Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
+            &path,
+            meta,
+            opts.usda_clip_frames,
+        )?)),
         other => Err(Error::bake(format!(
             "the {} writer is not available in this build",
             other.name()
