@@ -204,9 +204,9 @@ impl Piece {
             Attr::Roll => floats(out, &s.roll_deg[r.clone()]),
             Attr::Sway => floats(out, &s.sway_m[r.clone()]),
             Attr::Extent => {
-                // A bound of every instance under any rotation: the prototype's radius
-                // times the instance's scale around its position. Conservative, cheap,
-                // and it contains the exact box USD would compute.
+                // A bound of every instance under any rotation: the prototype's bound
+                // radius times the instance's scale around its position. Conservative,
+                // cheap, and it contains the box USD computes from the prototypes.
                 let mut lo = Vec3::ZERO;
                 let mut hi = Vec3::ZERO;
                 let mut bad = None;
@@ -298,11 +298,7 @@ impl UsdaWriter {
         let radius = meta
             .swarms
             .iter()
-            .map(|s| {
-                bee::body(s.bee_length_m)
-                    .radius()
-                    .max(bee::wings(s.bee_length_m).radius())
-            })
+            .map(|s| bee::bound_radius(s.bee_length_m))
             .collect();
         let clips_dir = dir.join(format!("{}.clips", meta.shot_name));
         let mut created_clips_dir = false;

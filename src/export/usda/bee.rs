@@ -21,11 +21,22 @@ impl Mesh {
         [lo, hi]
     }
 
-    /// Largest distance of a point from the origin: a bound on the mesh under any
-    /// rotation, used for the instancer's extent.
+    /// Largest distance of a point from the origin.
+    #[cfg(test)]
     pub fn radius(&self) -> f32 {
         self.points.iter().map(|p| p.length()).fold(0.0, f32::max)
     }
+}
+
+/// The radius of a sphere at the origin holding the corners of the prototype's bounding
+/// box (body and wings). USD bounds an instancer by each instance's transformed
+/// prototype box, so a sphere around the box, not around the points, is what contains
+/// `UsdGeomPointInstancer::ComputeExtentAtTime` under every rotation.
+pub fn bound_radius(length: f32) -> f32 {
+    let [a, b] = body(length).extent();
+    let [c, d] = wings(length).extent();
+    let (lo, hi) = (a.min(c), b.max(d));
+    lo.abs().max(hi.abs()).length()
 }
 
 /// Body profile (x, radius) from head tip to abdomen tip, in body lengths: head,
@@ -195,5 +206,20 @@ mod tests {
             assert!(newell_normal(&m.points, &f).y > 0.0);
         }
         assert!(m.radius() > 0.009 && m.radius() < 0.012);
+    }
+
+    #[test]
+    fn bound_radius_holds_the_prototype_box() {
+        let r = bound_radius(0.012);
+        for m in [body(0.012), wings(0.012)] {
+            let [lo, hi] = m.extent();
+            for x in [lo.x, hi.x] {
+                for y in [lo.y, hi.y] {
+                    for z in [lo.z, hi.z] {
+                        assert!(Vec3::new(x, y, z).length() <= r * 1.000_001);
+                    }
+                }
+            }
+        }
     }
 }
