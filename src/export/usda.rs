@@ -404,8 +404,10 @@ impl UsdaWriter {
         let mut spills = Vec::new();
         for m in &self.meta.swarms {
             for attr in ATTRS {
-                let scratch =
-                    ScratchFile::new(&self.dir, &format!("usda.{}.{}", m.name, attr.name()));
+                let scratch = ScratchFile::new(
+                    &self.dir,
+                    &format!("usda.{}.{}", m.name, attr.name().replace(':', "_")),
+                );
                 let f = File::create(&scratch.path).map_err(io(&scratch.path))?;
                 spills.push(Spill {
                     w: BufWriter::with_capacity(256 << 10, f),
@@ -678,10 +680,16 @@ impl UsdaWriter {
             let _ = write!(t, "{}{}", if i > 0 { ", " } else { "" }, rel(&c.dest));
         }
         let (a, b) = (self.meta.frame_start, self.meta.frame_end);
+        // Clip time = stage time: the clips hold samples at the frame numbers themselves.
+        let times = if a == b {
+            format!("({a}, {a})")
+        } else {
+            format!("({a}, {a}), ({b}, {b})")
+        };
         let _ = write!(
             t,
             "]\n            asset manifestAssetPath = {}\n            string primPath = \"/{}\"\n            \
-             double2[] times = [({a}, {a}), ({b}, {b})]\n        }}\n    }}\n    kind = \"component\"\n)\n{{\n",
+             double2[] times = [{times}]\n        }}\n    }}\n    kind = \"component\"\n)\n{{\n",
             rel(&manifest_dest),
             self.root
         );
@@ -1257,6 +1265,16 @@ mod tests {
         assert_eq!(files(dir.path()).len(), 5);
         bake(dir.path(), &m, 0).unwrap();
         assert_eq!(files(dir.path()), vec!["test-shot.usda"]);
+    }
+
+    #[test]
+    fn one_frame_shot_in_clips_mode() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[2], (5, 5));
+        assert_eq!(bake(dir.path(), &m, 24).unwrap().len(), 3);
+        let main = std::fs::read_to_string(dir.path().join("test-shot.usda")).unwrap();
+        assert!(main.contains("double2[] active = [(5, 0)]"));
+        assert!(main.contains("double2[] times = [(5, 5)]"));
     }
 
     #[test]
