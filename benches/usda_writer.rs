@@ -27,10 +27,10 @@ fn main() {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
         .collect();
-    assert_eq!(floats.len(), n * f * 19, "input size");
+    assert_eq!(floats.len(), n * f * 17, "input size");
     let v3 = |s: &[f32]| s.chunks_exact(3).map(Vec3::from_slice).collect::<Vec<_>>();
     let frames: Vec<SwarmFrame> = floats
-        .chunks_exact(n * 19)
+        .chunks_exact(n * 17)
         .map(|fr| {
             let mut at = 0;
             let mut take = |k: usize| {

@@ -175,7 +175,16 @@ impl Piece {
                         break;
                     }
                     sep(out, i);
-                    push_vec3(out, Vec3::splat(v));
+                    // Uniform: format the number once, copy it thrice.
+                    out.push(b'(');
+                    let at = out.len();
+                    push_f32(out, v);
+                    let end = out.len();
+                    for _ in 0..2 {
+                        out.extend_from_slice(b", ");
+                        out.extend_from_within(at..end);
+                    }
+                    out.push(b')');
                 }
                 bad
             }
@@ -410,7 +419,9 @@ impl UsdaWriter {
                 );
                 let f = File::create(&scratch.path).map_err(io(&scratch.path))?;
                 spills.push(Spill {
-                    w: BufWriter::with_capacity(256 << 10, f),
+                    // Smaller than a full piece (8,192 instances of text), which then goes
+                    // straight to the file instead of being copied through the buffer.
+                    w: BufWriter::with_capacity(64 << 10, f),
                     scratch,
                 });
             }
@@ -424,22 +435,24 @@ impl UsdaWriter {
         head.extend_from_slice(b"            ");
         head.extend_from_slice(itoa::Buffer::new().format(frame).as_bytes());
         head.extend_from_slice(b": [");
-        for (i, p) in pieces.iter().enumerate() {
-            let spill = &mut chunk.spills[p.swarm * ATTRS.len() + p.attr as usize];
-            let path = &spill.scratch.path;
-            let first = i == 0 || pieces[i - 1].swarm != p.swarm || pieces[i - 1].attr != p.attr;
-            let last = i + 1 == pieces.len()
-                || pieces[i + 1].swarm != p.swarm
-                || pieces[i + 1].attr != p.attr;
-            if first {
+        // Pieces are ordered by (swarm, attribute) like the spills, one group per spill;
+        // each spill is its own file, so they are written in parallel.
+        let groups: Vec<&[Piece]> = pieces
+            .chunk_by(|a, b| a.swarm == b.swarm && a.attr == b.attr)
+            .collect();
+        debug_assert_eq!(groups.len(), chunk.spills.len());
+        chunk
+            .spills
+            .par_iter_mut()
+            .zip(groups)
+            .try_for_each(|(spill, group)| {
+                let path = &spill.scratch.path;
                 spill.w.write_all(&head).map_err(io(path))?;
-            }
-            spill.w.write_all(&p.text).map_err(io(path))?;
-            if last {
-                spill.w.write_all(b"],\n").map_err(io(path))?;
-            }
-        }
-        Ok(())
+                for p in group {
+                    spill.w.write_all(&p.text).map_err(io(path))?;
+                }
+                spill.w.write_all(b"],\n").map_err(io(path))
+            })
     }
 
     /// Writes one swarm's time-sample blocks from a chunk's scratch files.
@@ -796,7 +809,7 @@ fn remove_stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) {
 
 /// One mesh prim of the prototype.
 fn mesh_text(s: &mut String, name: &str, m: &bee::Mesh, color: &str, opacity: Option<&str>) {
-    let ind = "                ";
+    let ind = "                    ";
     let vec3_list = |vs: &[Vec3]| {
         let mut t = Vec::new();
         for (i, v) in vs.iter().enumerate() {

@@ -16,9 +16,19 @@ pub fn push_f32(out: &mut Vec<u8>, v: f32) {
         out.push(b'0');
         return;
     }
-    let mut b = ryu::Buffer::new();
-    let s = b.format_finite(v);
-    out.extend_from_slice(s.strip_suffix(".0").unwrap_or(s).as_bytes());
+    // Format straight into the output (no stack buffer and copy): this is the hot loop
+    // of the writer, called for nearly every byte of a cache.
+    out.reserve(16);
+    let at = out.len();
+    // SAFETY: `reserve` made room for 16 more bytes, ryu writes at most 16 for an f32
+    // (e.g. "-1.2345678e-38"), and the bytes it reports written are initialised ASCII.
+    unsafe {
+        let n = ryu::raw::format32(v, out.as_mut_ptr().add(at));
+        out.set_len(at + n);
+    }
+    if out.ends_with(b".0") {
+        out.truncate(out.len() - 2);
+    }
 }
 
 /// `push_f32` for doubles (frame rates and time codes in the layer header).
