@@ -20,8 +20,8 @@ pub struct BakeArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Comma-separated formats: glb, gltf, usda, csv (default: the shot's, else glb,usda).
-    #[arg(long, value_parser = super::parse_formats)]
-    pub format: Option<Vec<Format>>,
+    #[arg(long, value_delimiter = ',', value_parser = super::parse_format)]
+    pub format: Vec<Format>,
     /// Override the shot's seed.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -55,10 +55,11 @@ pub fn run(a: BakeArgs) -> Result<()> {
         shot.frame_end = e;
     }
     let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
-    let formats = a
-        .format
-        .clone()
-        .unwrap_or_else(|| shot.output.formats.clone());
+    let formats = if a.format.is_empty() {
+        shot.output.formats.clone()
+    } else {
+        a.format.clone()
+    };
     let opts = BakeOptions {
         out_dir: &out_dir,
         formats: &formats,

@@ -72,19 +72,12 @@ pub fn parse_frames(s: &str) -> Result<(i32, i32), String> {
     Ok((a, b))
 }
 
-/// Parses a comma-separated list of formats.
-pub fn parse_formats(s: &str) -> Result<Vec<crate::export::Format>, String> {
-    let mut out = Vec::new();
-    for part in s.split(',') {
-        let f = crate::export::Format::parse(part).ok_or_else(|| {
-            format!(
-                "unknown format \"{}\": expected glb, gltf, usda or csv",
-                part.trim()
-            )
-        })?;
-        if !out.contains(&f) {
-            out.push(f);
-        }
-    }
-    Ok(out)
+/// Parses one output format name.
+pub fn parse_format(s: &str) -> Result<crate::export::Format, String> {
+    crate::export::Format::parse(s).ok_or_else(|| {
+        format!(
+            "unknown format \"{}\": expected glb, gltf, usda or csv",
+            s.trim()
+        )
+    })
 }

@@ -5,11 +5,14 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use toml_edit::{ImDocument, Item, Value};
 
+/// Byte spans of a key and of its value.
+type Spans = (Option<Range<usize>>, Option<Range<usize>>);
+
 /// The spans of every key and value in a parsed TOML document.
 pub struct Locator<'a> {
     src: &'a str,
     /// path → (key span, value span)
-    spans: BTreeMap<String, (Option<Range<usize>>, Option<Range<usize>>)>,
+    spans: BTreeMap<String, Spans>,
     /// Non-finite floats found anywhere (TOML allows `nan` and `inf`).
     pub non_finite: Vec<String>,
 }

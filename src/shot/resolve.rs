@@ -784,13 +784,13 @@ fn resolve_target(
                     "the key's position [x, y, z]",
                 )?,
             )?;
-            if let Some(&(prev, _)) = keys.last() {
-                if f <= prev {
-                    return Err(cx.err(
-                        &k(&format!("keys[{j}].frame")),
-                        format!("expected key frames in increasing order, found {f} after {prev}"),
-                    ));
-                }
+            if let Some(&(prev, _)) = keys.last()
+                && f <= prev
+            {
+                return Err(cx.err(
+                    &k(&format!("keys[{j}].frame")),
+                    format!("expected key frames in increasing order, found {f} after {prev}"),
+                ));
             }
             keys.push((f, p));
         }
@@ -856,10 +856,8 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
             for b in 0..=n {
                 for e in 0..=n {
                     let f = Vec3::new(a as f32, b as f32, e as f32) / n as f32 * 2.0 - Vec3::ONE;
-                    if let Region::Sphere { .. } = s.spawn {
-                        if f.length() > 1.0 {
-                            continue;
-                        }
+                    if matches!(s.spawn, Region::Sphere { .. }) && f.length() > 1.0 {
+                        continue;
                     }
                     let p = c + f * h;
                     if !shot

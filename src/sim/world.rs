@@ -8,6 +8,7 @@ use super::grid::Grid;
 use super::obstacle;
 use crate::field::CurlNoise;
 use crate::math::{self, Rng, normalize_or};
+use crate::model::kernels::Kernels;
 use crate::model::{boids, brownian, collision, oscillation, repulsion, targets, vision};
 use crate::shot::{ModelKind, Region, Shot, TargetKind};
 use glam::{Quat, Vec3};
@@ -17,8 +18,26 @@ use rayon::prelude::*;
 /// velocity (a short lag lets a pushed-back bee fly backwards briefly, as real bees do),
 /// how fast the roll reaches its target, and the smoothing of the mean path for sway.
 const YAW_LAG_S: f32 = 0.06;
-const ROLL_LAG_S: f32 = 0.08;
+const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
+
+/// Per-step blend factors 1 − exp(−dt/τ) of the first-order lags above.
+struct Lags {
+    yaw: f32,
+    roll: f32,
+    sway: f32,
+}
+
+impl Lags {
+    fn new(dt: f32) -> Self {
+        let f = |tau: f32| 1.0 - (-dt / tau).exp();
+        Lags {
+            yaw: f(YAW_LAG_S),
+            roll: f(ROLL_LAG_S),
+            sway: f(SWAY_PATH_S),
+        }
+    }
+}
 
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
@@ -31,9 +50,10 @@ struct Bee {
     yaw: f32,
     pitch_deg: f32,
     roll_deg: f32,
-    orient: Quat,
-    /// rad/s, world frame.
-    ang_vel: Vec3,
+    /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
+    /// velocity is the rotation between the two attitudes over that substep. Quaternions
+    /// are only built when a frame is recorded.
+    prev_attitude: (f32, f32, f32),
     density: f32,
     pressure: f32,
     swarm: u32,
@@ -45,6 +65,20 @@ struct Bee {
     phase_roll: f32,
 }
 
+impl Bee {
+    fn orientation(&self) -> Quat {
+        math::body_orientation(
+            self.yaw,
+            self.pitch_deg.to_radians(),
+            self.roll_deg.to_radians(),
+        )
+    }
+    fn prev_orientation(&self) -> Quat {
+        let (y, p, r) = self.prev_attitude;
+        math::body_orientation(y, p.to_radians(), r.to_radians())
+    }
+}
+
 /// Per-swarm constants, precomputed in f32.
 struct SwarmRt {
     model: ModelKind,
@@ -52,6 +86,8 @@ struct SwarmRt {
     k2: f32,
     k3: f32,
     h: f32,
+    kernels: Kernels,
+    rest_density: f32,
     d0: f32,
     fov: f32,
     roll_max: f32,
@@ -87,6 +123,8 @@ pub struct Simulation {
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
+    /// Largest capsule radius of any bee, m: bounds every interaction distance.
+    max_body_radius: f32,
     frame: i32,
     step_index: u64,
     record: Vec<SwarmFrame>,
@@ -107,6 +145,8 @@ impl Simulation {
                     k2: p.kappa2 as f32,
                     k3: p.kappa3 as f32,
                     h: p.neighbour_radius as f32,
+                    kernels: Kernels::new(p.neighbour_radius as f32),
+                    rest_density: s.bee.mass * Kernels::new(p.neighbour_radius as f32).poly6(0.0),
                     d0: p.avoid_distance as f32,
                     fov: p.fov_deg as f32,
                     roll_max: p.roll_max_deg as f32,
@@ -120,7 +160,7 @@ impl Simulation {
                     wing_area: s.bee.wing_area,
                     mean_cl: oscillation::mean_lift_coefficient(),
                     curl: CurlNoise::new(
-                        math::mix64(shot.seed ^ (si as u64 + 1) * 0x51ED),
+                        math::mix64(shot.seed ^ ((si as u64 + 1) * 0x51ED)),
                         p.noise_cell,
                         p.noise_gain,
                     ),
@@ -153,14 +193,14 @@ impl Simulation {
                 }
             })
             .collect();
-        let max_size = shot
+        let max_body_radius = shot
             .swarms
             .iter()
-            .map(|s| 1.0 + s.variation.size)
-            .fold(1.0, f32::max);
+            .map(|s| s.bee.radius * (1.0 + s.variation.size))
+            .fold(0.0, f32::max);
         let grid_cell = swarms
             .iter()
-            .map(|s| s.h + 2.0 * s.radius * max_size)
+            .map(|s| s.h + 2.0 * max_body_radius)
             .fold(0.0, f32::max);
 
         let mut bees = Vec::with_capacity(shot.bee_count());
@@ -225,12 +265,7 @@ impl Simulation {
                     yaw,
                     pitch_deg,
                     roll_deg,
-                    orient: math::body_orientation(
-                        yaw,
-                        pitch_deg.to_radians(),
-                        roll_deg.to_radians(),
-                    ),
-                    ang_vel: Vec3::ZERO,
+                    prev_attitude: (yaw, pitch_deg, roll_deg),
                     density: 0.0,
                     pressure: 0.0,
                     swarm: si as u32,
@@ -251,11 +286,28 @@ impl Simulation {
             positions: Vec::new(),
             grid: Grid::default(),
             grid_cell,
+            max_body_radius,
             step_index: 0,
             record: Vec::new(),
         };
         sim.update_record();
         sim
+    }
+
+    /// Places bee `index` (shot order) at `position` with `velocity` and re-records the
+    /// current frame: for tests and tools that need exact starting conditions.
+    pub fn set_bee(&mut self, index: usize, position: Vec3, velocity: Vec3) {
+        let b = &mut self.bees[index];
+        b.pos = position;
+        b.vel = velocity;
+        b.mean_pos = position;
+        // The heading follows the new direction of travel at once.
+        let horizontal = Vec3::new(velocity.x, 0.0, velocity.z);
+        if horizontal.length() > 0.02 {
+            b.yaw = math::yaw_of(horizontal);
+        }
+        b.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
+        self.update_record();
     }
 
     pub fn shot(&self) -> &Shot {
@@ -341,10 +393,11 @@ impl Simulation {
         }
         // Pass 2: forces and integration.
         let step_index = self.step_index;
+        let lags = Lags::new(dt);
         let next: Vec<Bee> = (0..self.bees.len())
             .into_par_iter()
             .with_min_len(128)
-            .map(|i| self.integrate(i, t, dt, step_index))
+            .map(|i| self.integrate(i, t, dt, &lags, step_index))
             .collect();
         self.next = next;
         std::mem::swap(&mut self.bees, &mut self.next);
@@ -359,11 +412,11 @@ impl Simulation {
         }
         let ri = s.radius * b.size;
         let mut rho = 0.0;
-        self.grid.for_each_near(b.pos, |j| {
+        let reach = s.h + ri + self.max_body_radius;
+        self.grid.for_each_within(b.pos, reach, |j, _, d2| {
             let o = &self.bees[j];
             let so = &self.swarms[o.swarm as usize];
-            let dist = b.pos.distance(o.pos);
-            rho += repulsion::density_term(so.mass, dist, ri + so.radius * o.size, s.h);
+            rho += repulsion::density_term(&s.kernels, so.mass, d2.sqrt(), ri + so.radius * o.size);
         });
         for &ti in &s.targets {
             let tr = &self.targets[ti];
@@ -371,11 +424,15 @@ impl Simulation {
                 continue;
             }
             for off in &tr.offsets {
-                rho += repulsion::density_term(s.mass, b.pos.distance(tr.center + *off), ri, s.h);
+                rho += repulsion::density_term(
+                    &s.kernels,
+                    s.mass,
+                    b.pos.distance(tr.center + *off),
+                    ri,
+                );
             }
         }
-        let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
-        (rho, repulsion::pressure(s.stiffness, rho, rest))
+        (rho, repulsion::pressure(s.stiffness, rho, s.rest_density))
     }
 
     /// A deterministic direction separating coincident bees i and j (opposite for j and i).
@@ -384,7 +441,7 @@ impl Simulation {
         Rng::new(a as u64, b as u64, 0x5EA).unit_vector() * sign
     }
 
-    fn integrate(&self, i: usize, t: f64, dt: f32, step_index: u64) -> Bee {
+    fn integrate(&self, i: usize, t: f64, dt: f32, lags: &Lags, step_index: u64) -> Bee {
         let b = self.bees[i];
         let s = &self.swarms[b.swarm as usize];
         let shot = &self.shot;
@@ -396,19 +453,17 @@ impl Simulation {
         let mut a_rep = Vec3::ZERO;
         let mut a_col = Vec3::ZERO;
         let mut hood = boids::Neighbourhood::default();
-        self.grid.for_each_near(b.pos, |j| {
+        let reach = s.h + ri + self.max_body_radius;
+        self.grid.for_each_within(b.pos, reach, |j, pj, d2| {
             if j == i {
                 return;
             }
             let o = &self.bees[j];
+            let r = b.pos - pj;
             let so = &self.swarms[o.swarm as usize];
-            let r = b.pos - o.pos;
-            let dist = r.length();
+            let dist = d2.sqrt();
             let contact = ri + so.radius * o.size;
-            if dist >= s.h + contact {
-                return;
-            }
-            let fallback = Self::separation_fallback(i, j);
+            let fallback = || Self::separation_fallback(i, j);
             match s.model {
                 ModelKind::Bee => {
                     let rho_j = if o.density > 0.0 {
@@ -417,16 +472,8 @@ impl Simulation {
                         b.density
                     };
                     a_rep += repulsion::pressure_term(
-                        r,
-                        dist,
-                        contact,
-                        s.h,
-                        so.mass,
-                        b.pressure,
-                        o.pressure.max(0.0),
-                        b.density,
-                        rho_j,
-                        fallback,
+                        &s.kernels, r, dist, contact, so.mass, b.pressure, o.pressure, b.density,
+                        rho_j, fallback,
                     );
                 }
                 ModelKind::Boids => {
@@ -437,7 +484,7 @@ impl Simulation {
                         hood.separation += if dist > 1e-6 {
                             r / (dist * dist)
                         } else {
-                            fallback * 1e3
+                            fallback() * 1e3
                         };
                     }
                 }
@@ -458,14 +505,21 @@ impl Simulation {
                 target.reach,
             );
             if s.model == ModelKind::Bee && b.pos.distance(tr.center) <= tr.bounding + s.h + ri {
-                let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
-                for (k, off) in tr.offsets.iter().enumerate() {
+                for off in &tr.offsets {
                     let r = b.pos - (tr.center + *off);
                     let dist = r.length();
-                    let fallback = normalize_or(*off, Vec3::Y);
-                    let _ = k;
+                    // A static particle mirrors the bee's pressure at rest density.
                     a_rep += repulsion::pressure_term(
-                        r, dist, ri, s.h, s.mass, b.pressure, b.pressure, b.density, rest, fallback,
+                        &s.kernels,
+                        r,
+                        dist,
+                        ri,
+                        s.mass,
+                        b.pressure,
+                        b.pressure,
+                        b.density,
+                        s.rest_density,
+                        || normalize_or(*off, Vec3::Y),
                     );
                 }
             }
@@ -498,8 +552,7 @@ impl Simulation {
                         gamma = vision::ramp((d / s.d0).max(0.0)).abs();
                     }
                 }
-                out.roll_deg =
-                    b.roll_deg + (roll_target - b.roll_deg) * (1.0 - (-dt / ROLL_LAG_S).exp());
+                out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * lags.roll;
                 let f_o = oscillation::accel(
                     out.pitch_deg,
                     out.roll_deg,
@@ -560,20 +613,15 @@ impl Simulation {
             let mut dy = target - b.yaw;
             dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
                 - std::f32::consts::PI;
-            out.yaw =
-                (b.yaw + dy * (1.0 - (-dt / YAW_LAG_S).exp())).rem_euclid(std::f32::consts::TAU);
+            out.yaw = (b.yaw + dy * lags.yaw).rem_euclid(std::f32::consts::TAU);
         }
-        out.mean_pos = b.mean_pos + (pos - b.mean_pos) * (1.0 - (-dt / SWAY_PATH_S).exp());
-        out.orient = math::body_orientation(
-            out.yaw,
-            out.pitch_deg.to_radians(),
-            out.roll_deg.to_radians(),
-        );
-        out.ang_vel = math::angular_velocity(b.orient, out.orient, dt);
+        out.mean_pos = b.mean_pos + (pos - b.mean_pos) * lags.sway;
+        out.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
         out
     }
 
     fn update_record(&mut self) {
+        let dt = self.shot.dt() as f32;
         let mut id = 0u64;
         let mut rec = std::mem::take(&mut self.record);
         rec.resize_with(self.shot.swarms.len(), SwarmFrame::default);
@@ -588,7 +636,7 @@ impl Simulation {
             f.velocity.clear();
             f.velocity.extend(bees.iter().map(|b| b.vel));
             f.orientation.clear();
-            f.orientation.extend(bees.iter().map(|b| b.orient));
+            f.orientation.extend(bees.iter().map(|b| b.orientation()));
             f.heading.clear();
             f.heading
                 .extend(bees.iter().map(|b| Quat::from_rotation_y(b.yaw)));
@@ -602,10 +650,10 @@ impl Simulation {
                     .map(|b| (b.pos - b.mean_pos).dot(Quat::from_rotation_y(b.yaw) * Vec3::Z)),
             );
             f.angular_velocity_deg.clear();
-            f.angular_velocity_deg.extend(
-                bees.iter()
-                    .map(|b| b.ang_vel * (180.0 / std::f32::consts::PI)),
-            );
+            f.angular_velocity_deg.extend(bees.iter().map(|b| {
+                math::angular_velocity(b.prev_orientation(), b.orientation(), dt)
+                    * (180.0 / std::f32::consts::PI)
+            }));
             f.scale.clear();
             f.scale.extend(bees.iter().map(|b| b.size));
             id += s.count as u64;
