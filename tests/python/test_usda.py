@@ -21,6 +21,10 @@ FIRST, LAST = 3, 31
 CLIP_FRAMES = 7  # does not divide the 29 frames: the last clip is short
 
 
+def bake_usda(beeswarm_bin, clip_frames, out_dir):
+    bake(beeswarm_bin, shot_text(clip_frames), out_dir, "--format", "usda,csv")
+
+
 def shot_text(clip_frames):
     return f"""
 [scene]
@@ -46,7 +50,6 @@ name = "hive"
 position = [0.0, 1.0, 0.0]
 
 [output]
-formats = ["usda", "csv"]
 usda_clip_frames = {clip_frames}
 """
 
@@ -57,7 +60,7 @@ def baked(beeswarm_bin, tmp_path_factory):
     out = {}
     for mode, clip_frames in (("single", 0), ("clips", CLIP_FRAMES)):
         d = tmp_path_factory.mktemp(mode)
-        bake(beeswarm_bin, shot_text(clip_frames), d)
+        bake_usda(beeswarm_bin, clip_frames, d)
         out[mode] = d
     return out
 
@@ -204,7 +207,7 @@ def test_clips_read_back_like_the_single_file(baked):
 def test_bakes_are_byte_identical(beeswarm_bin, baked, tmp_path):
     for mode, clip_frames in (("single", 0), ("clips", CLIP_FRAMES)):
         d = tmp_path / mode
-        bake(beeswarm_bin, shot_text(clip_frames), d)
+        bake_usda(beeswarm_bin, clip_frames, d)
         files = [p.relative_to(d) for p in sorted(d.rglob("*.usda"))]
         assert files and files == [p.relative_to(baked[mode]) for p in sorted(baked[mode].rglob("*.usda"))]
         for f in files:
@@ -212,8 +215,8 @@ def test_bakes_are_byte_identical(beeswarm_bin, baked, tmp_path):
 
 
 def test_rebake_in_single_mode_removes_old_clips(beeswarm_bin, tmp_path):
-    bake(beeswarm_bin, shot_text(CLIP_FRAMES), tmp_path)
+    bake_usda(beeswarm_bin, CLIP_FRAMES, tmp_path)
     assert (tmp_path / "usda_test.clips").is_dir()
-    bake(beeswarm_bin, shot_text(0), tmp_path)
+    bake_usda(beeswarm_bin, 0, tmp_path)
     assert not (tmp_path / "usda_test.clips").exists()
     assert run_validators(open_stage(tmp_path)) == []
