@@ -1281,6 +1281,19 @@ mod tests {
     }
 
     #[test]
+    fn an_empty_swarm_is_an_empty_instancer() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[0, 2], (1, 2));
+        bake(dir.path(), &m, 0).unwrap();
+        let t = std::fs::read_to_string(dir.path().join("test-shot.usda")).unwrap();
+        assert!(t.contains("int64[] ids = []\n        int[] protoIndices = []\n"));
+        assert!(t.contains("point3f[] positions.timeSamples = {\n            1: [],\n"));
+        assert!(
+            t.contains("float3[] extent.timeSamples = {\n            1: [(0, 0, 0), (0, 0, 0)],\n")
+        );
+    }
+
+    #[test]
     fn one_frame_shot_in_clips_mode() {
         let dir = tempfile::tempdir().unwrap();
         let m = meta(&[2], (5, 5));
