@@ -41,8 +41,6 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use text::{HalfFormatter, push_f32};
 
-pub use text::{f16_to_f32, f32_to_f16};
-
 /// Instances per formatting task. Large enough that a task outweighs its scheduling,
 /// small enough that one big swarm still spreads over every core.
 const PIECE: usize = 8192;

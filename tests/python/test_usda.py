@@ -220,3 +220,34 @@ def test_rebake_in_single_mode_removes_old_clips(beeswarm_bin, tmp_path):
     bake_usda(beeswarm_bin, 0, tmp_path)
     assert not (tmp_path / "usda_test.clips").exists()
     assert run_validators(open_stage(tmp_path)) == []
+
+
+@pytest.mark.parametrize("clip_frames", [0, CLIP_FRAMES])
+def test_interrupted_bake_keeps_the_previous_cache(beeswarm_bin, tmp_path, clip_frames):
+    """Ctrl-C in the middle of a bake: the earlier cache is byte for byte intact, and no
+    temporary or scratch file is left."""
+    import json
+    import signal
+
+    out = tmp_path / "out"
+    bake_usda(beeswarm_bin, clip_frames, out)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    long_shot = shot_text(clip_frames).replace(f"frames = [{FIRST}, {LAST}]", "frames = [1, 100000]")
+    (tmp_path / "long.toml").write_text(long_shot)
+    proc = subprocess.Popen(
+        [beeswarm_bin, "bake", str(tmp_path / "long.toml"), "--out", str(out),
+         "--format", "usda,csv", "--progress", "json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        for line in proc.stdout:
+            event = json.loads(line)
+            if event.get("event") == "progress" and event["done"] >= 2 * CLIP_FRAMES + 3:
+                break  # frames (and, with clips, finished clip layers) are in flight
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode != 0
+    after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert sorted(after) == sorted(before)
+    assert all(after[p] == before[p] for p in before)
