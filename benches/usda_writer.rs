@@ -17,6 +17,11 @@ fn main() {
         .skip(1)
         .filter(|a| a != "--bench")
         .collect();
+    if args.is_empty() {
+        // `cargo test --all-targets` / `cargo bench` without arguments: nothing to measure.
+        eprintln!("usda_writer: run through scripts/bench_usda.py (INPUT OUT_DIR BEES FRAMES)");
+        return;
+    }
     let [input, out, bees, frames] = &args[..] else {
         eprintln!("usage: usda_writer INPUT OUT_DIR BEES FRAMES");
         std::process::exit(2);
