@@ -1323,7 +1323,7 @@ mod tests {
     #[ignore]
     fn write_sample() {
         let dir = PathBuf::from(std::env::var("BEESWARM_USDA_SAMPLE").unwrap());
-        let m = meta(&[5, 3], (1, 12));
+        let m = meta(&[5, 3], (-3, 8));
         std::fs::create_dir_all(dir.join("single")).unwrap();
         std::fs::create_dir_all(dir.join("clips")).unwrap();
         bake(&dir.join("single"), &m, 0).unwrap();
