@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod gltf;
 pub mod usda;
 
 use crate::error::{Error, Result};
@@ -93,18 +94,25 @@ pub fn open_writer(
     dir: &Path,
     opts: &OutputOptions,
 ) -> Result<Box<dyn CacheWriter>> {
-    let _ = opts;
     let path = dir.join(format.file_name(&meta.shot_name));
     match format {
         Format::Csv => Ok(Box::new(csv::CsvWriter::create(&path, meta)?)),
+        Format::Glb => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Glb,
+            &path,
+            meta,
+            opts,
+        )?)),
+        Format::Gltf => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Gltf,
+            &path,
+            meta,
+            opts,
+        )?)),
         Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
             &path,
             meta,
             opts.usda_clip_frames,
         )?)),
-        other => Err(Error::bake(format!(
-            "the {} writer is not available in this build",
-            other.name()
-        ))),
     }
 }

@@ -59,9 +59,20 @@ impl Perlin {
 
     /// Noise value and its gradient at `x` (lattice spacing 1).
     pub fn sample(&self, x: Vec3) -> (f32, Vec3) {
-        let (ix, fx) = split(x.x);
-        let (iy, fy) = split(x.y);
-        let (iz, fz) = split(x.z);
+        self.sample_at(&LatticePoint::new(x))
+    }
+
+    /// As [`Perlin::sample`], at a point whose lattice cell and blend weights are already
+    /// known: several noise functions sampled at one point share that work.
+    pub fn sample_at(&self, lp: &LatticePoint) -> (f32, Vec3) {
+        let LatticePoint {
+            ix,
+            iy,
+            iz,
+            f: [fx, fy, fz],
+            w: [u, v, w],
+            dw: [du, dv, dw],
+        } = *lp;
         // Corner hashes p[p[p[x] + y] + z], sharing the inner lookups between corners
         // (14 table reads instead of 24). `& 511` lets the compiler drop bounds checks.
         let p = &self.perm;
@@ -91,8 +102,6 @@ impl Perlin {
             ];
             c[k] = g[k][0] * d[0] + g[k][1] * d[1] + g[k][2] * d[2];
         }
-        let (u, v, w) = (fade(fx), fade(fy), fade(fz));
-        let (du, dv, dw) = (dfade(fx), dfade(fy), dfade(fz));
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let lerp3 = |a: [f32; 3], b: [f32; 3], t: f32| {
             [
@@ -123,6 +132,33 @@ impl Perlin {
         let gx1 = lerp3(lerp3(g[4], g[5], u), lerp3(g[6], g[7], u), v);
         let gb = lerp3(gx0, gx1, w);
         (value, Vec3::new(gb[0] + dx, gb[1] + dy, gb[2] + dz))
+    }
+}
+
+/// A point's lattice cell, fractional position, blend weights and their derivatives.
+#[derive(Clone, Copy, Debug)]
+pub struct LatticePoint {
+    ix: usize,
+    iy: usize,
+    iz: usize,
+    f: [f32; 3],
+    w: [f32; 3],
+    dw: [f32; 3],
+}
+
+impl LatticePoint {
+    pub fn new(x: Vec3) -> Self {
+        let (ix, fx) = split(x.x);
+        let (iy, fy) = split(x.y);
+        let (iz, fz) = split(x.z);
+        LatticePoint {
+            ix,
+            iy,
+            iz,
+            f: [fx, fy, fz],
+            w: [fade(fx), fade(fy), fade(fz)],
+            dw: [dfade(fx), dfade(fy), dfade(fz)],
+        }
     }
 }
 

@@ -39,6 +39,38 @@ impl Lags {
     }
 }
 
+/// Neighbours cached per bee by the density pass for the force pass: one grid walk per
+/// substep instead of two. A bee with more neighbours than fit falls back to the grid.
+const CACHED_NEIGHBOURS: usize = 40;
+
+#[derive(Clone, Copy)]
+struct Neighbours {
+    len: u8,
+    overflow: bool,
+    idx: [u32; CACHED_NEIGHBOURS],
+}
+
+impl Default for Neighbours {
+    fn default() -> Self {
+        Neighbours {
+            len: 0,
+            overflow: false,
+            idx: [0; CACHED_NEIGHBOURS],
+        }
+    }
+}
+
+impl Neighbours {
+    fn push(&mut self, j: usize) {
+        if (self.len as usize) < CACHED_NEIGHBOURS {
+            self.idx[self.len as usize] = j as u32;
+            self.len += 1;
+        } else {
+            self.overflow = true;
+        }
+    }
+}
+
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
 struct Bee {
@@ -120,6 +152,7 @@ pub struct Simulation {
     targets: Vec<TargetRt>,
     bees: Vec<Bee>,
     next: Vec<Bee>,
+    neighbours: Vec<Neighbours>,
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
@@ -282,6 +315,7 @@ impl Simulation {
             swarms,
             targets,
             next: bees.clone(),
+            neighbours: Vec::new(),
             bees,
             positions: Vec::new(),
             grid: Grid::default(),
@@ -381,15 +415,17 @@ impl Simulation {
         self.positions.extend(self.bees.iter().map(|b| b.pos));
         self.grid.build(&self.positions, self.grid_cell);
 
-        // Pass 1: density and pressure (Eq. 10) for bees of the bee model.
-        let densities: Vec<(f32, f32)> = (0..self.bees.len())
+        // Pass 1: neighbours, and density and pressure (Eq. 10) for bees of the bee model.
+        let densities: Vec<(f32, f32, Neighbours)> = (0..self.bees.len())
             .into_par_iter()
             .with_min_len(256)
             .map(|i| self.density(i))
             .collect();
-        for (b, (d, p)) in self.bees.iter_mut().zip(densities) {
+        self.neighbours.clear();
+        for (b, (d, p, n)) in self.bees.iter_mut().zip(densities) {
             b.density = d;
             b.pressure = p;
+            self.neighbours.push(n);
         }
         // Pass 2: forces and integration.
         let step_index = self.step_index;
@@ -404,20 +440,52 @@ impl Simulation {
         self.step_index += 1;
     }
 
-    fn density(&self, i: usize) -> (f32, f32) {
+    /// Every other bee within interaction reach of bee i, in grid order: the cached list,
+    /// or a grid walk when the list overflowed.
+    #[inline]
+    fn for_each_neighbour(&self, i: usize, reach: f32, mut f: impl FnMut(usize, Vec3, f32)) {
+        let p = self.bees[i].pos;
+        let n = &self.neighbours[i];
+        if n.overflow {
+            self.grid.for_each_within(p, reach, |j, pj, d2| {
+                if j != i {
+                    f(j, pj, d2)
+                }
+            });
+        } else {
+            for &j in &n.idx[..n.len as usize] {
+                let pj = self.bees[j as usize].pos;
+                f(j as usize, pj, p.distance_squared(pj));
+            }
+        }
+    }
+
+    fn density(&self, i: usize) -> (f32, f32, Neighbours) {
         let b = &self.bees[i];
         let s = &self.swarms[b.swarm as usize];
-        if s.model != ModelKind::Bee {
-            return (0.0, 0.0);
-        }
         let ri = s.radius * b.size;
-        let mut rho = 0.0;
         let reach = s.h + ri + self.max_body_radius;
+        let bee_model = s.model == ModelKind::Bee;
+        let mut rho = 0.0;
+        let mut list = Neighbours::default();
         self.grid.for_each_within(b.pos, reach, |j, _, d2| {
-            let o = &self.bees[j];
-            let so = &self.swarms[o.swarm as usize];
-            rho += repulsion::density_term(&s.kernels, so.mass, d2.sqrt(), ri + so.radius * o.size);
+            if j != i {
+                list.push(j);
+            }
+            if bee_model {
+                let o = &self.bees[j];
+                let so = &self.swarms[o.swarm as usize];
+                rho += repulsion::density_term(
+                    &s.kernels,
+                    so.mass,
+                    d2.sqrt(),
+                    ri + so.radius * o.size,
+                );
+            }
         });
+        if !bee_model {
+            return (0.0, 0.0, list);
+        }
         for &ti in &s.targets {
             let tr = &self.targets[ti];
             if b.pos.distance(tr.center) > tr.bounding + s.h + ri {
@@ -432,7 +500,11 @@ impl Simulation {
                 );
             }
         }
-        (rho, repulsion::pressure(s.stiffness, rho, s.rest_density))
+        (
+            rho,
+            repulsion::pressure(s.stiffness, rho, s.rest_density),
+            list,
+        )
     }
 
     /// A deterministic direction separating coincident bees i and j (opposite for j and i).
@@ -454,10 +526,7 @@ impl Simulation {
         let mut a_col = Vec3::ZERO;
         let mut hood = boids::Neighbourhood::default();
         let reach = s.h + ri + self.max_body_radius;
-        self.grid.for_each_within(b.pos, reach, |j, pj, d2| {
-            if j == i {
-                return;
-            }
+        self.for_each_neighbour(i, reach, |j, pj, d2| {
             let o = &self.bees[j];
             let r = b.pos - pj;
             let so = &self.swarms[o.swarm as usize];
