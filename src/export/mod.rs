@@ -7,6 +7,7 @@
 pub mod atomic;
 pub mod csv;
 pub mod gltf;
+pub mod usda;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -110,9 +111,10 @@ pub fn open_writer(
             meta,
             opts,
         )?)),
-        other => Err(Error::bake(format!(
-            "the {} writer is not available in this build",
-            other.name()
-        ))),
+        Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
+            &path,
+            meta,
+            opts.usda_clip_frames,
+        )?)),
     }
 }
