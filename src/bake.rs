@@ -118,11 +118,12 @@ pub fn bake(
                         }
                     }
                     Message::Done => {
-                        let mut outputs = Vec::new();
+                        // Seal every file of every format, then rename them all.
+                        let mut sealed = Vec::new();
                         for w in writers {
-                            outputs.extend(w.finish()?);
+                            sealed.extend(w.finish()?);
                         }
-                        return Ok(outputs);
+                        return export::atomic::commit_all(sealed);
                     }
                 }
             }

@@ -69,10 +69,16 @@ pub fn parse_frames(s: &str) -> Result<(i32, i32), String> {
             "the frame range {a}:{b} is reversed; write {b}:{a}"
         ));
     }
+    // The same limits as `frames` in a shot (and no i32 overflow in the frame count).
+    if a < -1_000_000 || b > 1_000_000 || b as i64 - a as i64 > 100_000 {
+        return Err(format!(
+            "expected at most 100000 frames within ±1000000, found {a}:{b}"
+        ));
+    }
     Ok((a, b))
 }
 
-/// Parses one output format name.
+/// Parses one format name; clap splits `--format glb,csv` at the commas.
 pub fn parse_format(s: &str) -> Result<crate::export::Format, String> {
     crate::export::Format::parse(s).ok_or_else(|| {
         format!(

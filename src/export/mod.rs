@@ -7,10 +7,11 @@
 pub mod atomic;
 pub mod csv;
 pub mod gltf;
+pub mod usda;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A cache format the bake can write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -70,8 +71,10 @@ impl Default for OutputOptions {
 pub trait CacheWriter: Send {
     /// Called once per frame, in frame order, for every frame of the range.
     fn write_frame(&mut self, frame: &Frame) -> Result<()>;
-    /// Completes the files, renames them into place and returns their paths.
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>>;
+    /// Completes the files and returns them sealed under temporary names, in the order
+    /// they must be renamed into place (the bake renames them only once every writer has
+    /// sealed, so a failure in any format leaves every previous cache untouched).
+    fn finish(self: Box<Self>) -> Result<Vec<atomic::SealedFile>>;
 }
 
 /// Opens the preview writer (`<name>.preview.png`, a plot of the trajectories).
@@ -108,9 +111,10 @@ pub fn open_writer(
             meta,
             opts,
         )?)),
-        other => Err(Error::bake(format!(
-            "the {} writer is not available in this build",
-            other.name()
-        ))),
+        Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
+            &path,
+            meta,
+            opts.usda_clip_frames,
+        )?)),
     }
 }

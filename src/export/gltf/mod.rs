@@ -25,7 +25,7 @@ mod mesh;
 
 pub use mesh::{BeeMesh, Primitive};
 
-use super::atomic::{AtomicFile, ScratchFile};
+use super::atomic::{AtomicFile, ScratchFile, SealedFile};
 use super::{CacheWriter, OutputOptions};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -321,7 +321,7 @@ impl CacheWriter for GltfWriter {
         Ok(())
     }
 
-    fn finish(mut self: Box<Self>) -> Result<Vec<PathBuf>> {
+    fn finish(mut self: Box<Self>) -> Result<Vec<SealedFile>> {
         if self.next_frame != self.meta.frame_end + 1 {
             return Err(Error::bake(format!(
                 "glTF writer: finished after frame {} of {}..={}",
@@ -340,7 +340,7 @@ impl CacheWriter for GltfWriter {
             Container::Glb => {
                 let mut out = AtomicFile::create(&self.dest)?;
                 write_glb(&self, &layout, &mut out)?;
-                Ok(vec![out.commit()?])
+                Ok(vec![out.seal()?])
             }
             Container::Gltf => {
                 let bin_path = self.dest.with_file_name(&bin_name);
@@ -353,8 +353,7 @@ impl CacheWriter for GltfWriter {
                     .map_err(|e| Error::bake(format!("glTF JSON: {e}")))?;
                 // Both files are complete before either is renamed; the .bin goes first so
                 // a new .gltf never points at an old buffer.
-                let bin_path = bin.commit()?;
-                Ok(vec![gltf.commit()?, bin_path])
+                Ok(vec![bin.seal()?, gltf.seal()?])
             }
         }
     }
