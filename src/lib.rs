@@ -11,3 +11,5 @@ pub mod shot;
 pub mod sim;
 
 pub use error::{Error, Result};
+pub mod eval;
+pub mod plot;

@@ -1,0 +1,13 @@
+//! Realism you can measure: evaluation of simulated flights against recorded insect
+//! flights (paper 000 Sec. VI/VIII, paper 002 "Model Evaluation"), and calibration of
+//! the model's parameters with a genetic algorithm. See docs/validation.md.
+
+pub mod cli;
+pub mod figure;
+pub mod histogram;
+pub mod metrics;
+pub mod report;
+pub mod resample;
+pub mod tracks;
+
+pub use cli::{EvalArgs, run_eval};
