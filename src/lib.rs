@@ -4,8 +4,12 @@
 //! Conventions everywhere: metres, seconds, world Y-up right-handed; quaternions are
 //! glam `Quat` (x, y, z, w) body → world; body X forward, Y up, Z right.
 
+pub mod bake;
+pub mod cli;
 pub mod error;
 pub mod export;
+pub mod field;
+pub mod math;
 pub mod model;
 pub mod shot;
 pub mod sim;

@@ -1,3 +1,4 @@
+//! The `beeswarm` binary: all logic lives in the library; this only runs the CLI.
 fn main() {
-    println!("Hello, world!");
+    std::process::exit(beeswarm::cli::main());
 }

@@ -73,6 +73,18 @@ pub trait CacheWriter: Send {
     fn finish(self: Box<Self>) -> Result<Vec<PathBuf>>;
 }
 
+/// Opens the preview writer (`<name>.preview.png`, a plot of the trajectories).
+pub fn open_preview(
+    shot: &crate::shot::Shot,
+    meta: &CacheMeta,
+    dir: &Path,
+) -> Result<Box<dyn CacheWriter>> {
+    let _ = (shot, meta, dir);
+    Err(Error::bake(
+        "the preview writer is not available in this build",
+    ))
+}
+
 /// Opens the writer for one format in `dir`.
 pub fn open_writer(
     format: Format,

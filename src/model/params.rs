@@ -82,7 +82,7 @@ impl BeeParams {
             fov_deg: 45.0,
             roll_max_deg: 45.0,
             oscillation_time_unit: 0.01,
-            pressure_stiffness: 40.0,
+            pressure_stiffness: 1.0,
             collision_stiffness: 4000.0,
             attraction: 1.0,
             containment: 4.0,

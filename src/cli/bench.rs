@@ -1,0 +1,98 @@
+//! `beeswarm bench`: simulation throughput for the default preset, as one JSON line.
+
+use crate::bake::with_threads;
+use crate::error::{Error, Result};
+use crate::shot::{self, Shot};
+use crate::sim::Simulation;
+use clap::Args;
+use std::path::Path;
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+#[command(
+    about = "Measure simulation speed (prints one JSON line)",
+    after_help = "Example:\n  beeswarm bench --bees 10000 --frames 48 --threads 2"
+)]
+pub struct BenchArgs {
+    /// Number of bees.
+    #[arg(long, default_value_t = 10_000)]
+    pub bees: usize,
+    /// Number of frames to simulate (after the first).
+    #[arg(long, default_value_t = 48)]
+    pub frames: usize,
+    /// Integration substeps per frame.
+    #[arg(long, default_value_t = 4)]
+    pub substeps: u32,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Preset to measure.
+    #[arg(long, default_value = "nest")]
+    pub preset: String,
+}
+
+/// A swarm at a constant density of 500 bees per cubic metre around a nest, so that the
+/// work per bee stays the same as the count grows.
+pub fn bench_shot(
+    bees: usize,
+    frames: usize,
+    substeps: u32,
+    preset: &str,
+) -> std::result::Result<Shot, crate::error::ShotError> {
+    let side = (bees as f64 / 500.0).cbrt().max(0.5);
+    let src = format!(
+        "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\npreset = \"{preset}\"\nspawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n\n[[target]]\ntype = \"nest\"\nposition = [0, {c}, 0]\n",
+        frames + 1,
+        c = side / 2.0 + 0.5
+    );
+    shot::parse(&src, Path::new("<bench>"), Path::new("."))
+}
+
+pub fn run(a: BenchArgs) -> Result<()> {
+    if a.bees == 0 || a.frames == 0 {
+        return Err(Error::input("--bees and --frames must be at least 1"));
+    }
+    let shot = bench_shot(a.bees, a.frames, a.substeps, &a.preset)?;
+    let threads = if a.threads == 0 {
+        rayon::current_num_threads()
+    } else {
+        a.threads
+    };
+    let (seconds, rss) = with_threads(threads, || {
+        let mut sim = Simulation::new(&shot);
+        let t = Instant::now();
+        for _ in 0..a.frames {
+            sim.advance();
+        }
+        (t.elapsed().as_secs_f64(), peak_rss_mb())
+    })?;
+    let steps = (a.bees * a.frames) as f64 * a.substeps as f64;
+    println!(
+        "{}",
+        serde_json::json!({
+            "bees": a.bees,
+            "frames": a.frames,
+            "substeps": a.substeps,
+            "threads": threads,
+            "preset": a.preset,
+            "seconds": (seconds * 1000.0).round() / 1000.0,
+            "bee_steps_per_s": (steps / seconds).round(),
+            "bee_frames_per_s": ((a.bees * a.frames) as f64 / seconds).round(),
+            "peak_rss_mb": rss,
+        })
+    );
+    Ok(())
+}
+
+/// Peak resident memory of this process in MB (Linux), or null elsewhere.
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()?;
+    Some((kb / 1024.0).round())
+}

@@ -1,0 +1,97 @@
+//! `beeswarm check`: validate a shot and say what a bake would produce.
+
+use crate::error::Result;
+use crate::shot::{Shape, Shot};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+#[command(
+    about = "Validate a shot and report what it would produce",
+    after_help = "Example:\n  beeswarm check examples/nest.toml"
+)]
+pub struct CheckArgs {
+    /// The shot file (TOML).
+    pub shot: PathBuf,
+}
+
+pub fn run(a: CheckArgs) -> Result<()> {
+    let shot = crate::shot::load(&a.shot)?;
+    print!("{}", summary(&shot));
+    Ok(())
+}
+
+/// A human-readable summary of a valid shot.
+pub fn summary(shot: &Shot) -> String {
+    let mut s = String::new();
+    use std::fmt::Write;
+    let _ = writeln!(s, "shot \"{}\": ok", shot.name);
+    let _ = writeln!(
+        s,
+        "  frames {}–{} ({} frames at {} fps, {:.2} s), {} substeps, seed {}",
+        shot.frame_start,
+        shot.frame_end,
+        shot.frame_count(),
+        shot.fps,
+        (shot.frame_count() - 1) as f64 / shot.fps,
+        shot.substeps,
+        shot.seed
+    );
+    let _ = writeln!(
+        s,
+        "  {} swarm(s), {} bees in all:",
+        shot.swarms.len(),
+        shot.bee_count()
+    );
+    for w in &shot.swarms {
+        let p = &w.params;
+        let _ = writeln!(
+            s,
+            "    {}: {} bees, model {}, preset {} (κ1 {} κ2 {} κ3 {}, L {} m, ε {}, h {} m, speed {} m/s)",
+            w.name,
+            w.count,
+            w.model.name(),
+            w.preset,
+            p.kappa1,
+            p.kappa2,
+            p.kappa3,
+            p.noise_cell,
+            p.noise_gain,
+            p.neighbour_radius,
+            p.speed
+        );
+    }
+    let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
+    for o in &shot.obstacles {
+        let kind = match o.shape {
+            Shape::Sphere { .. } => "sphere",
+            Shape::Box { .. } => "box",
+            Shape::Capsule { .. } => "capsule",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::Plane { .. } => "plane",
+        };
+        let _ = writeln!(s, "    {}: {kind}", o.name);
+    }
+    let _ = writeln!(s, "  {} target(s)", shot.targets.len());
+    for t in &shot.targets {
+        let _ = writeln!(
+            s,
+            "    {}: {:?}, {} key(s), strength {} m/s²",
+            t.name,
+            t.kind,
+            t.keys.len(),
+            t.strength
+        );
+    }
+    if shot.wind != glam::Vec3::ZERO {
+        let _ = writeln!(s, "  wind {} m/s", shot.wind);
+    }
+    let _ = writeln!(s, "  outputs in {}:", shot.output.dir.display());
+    for f in &shot.output.formats {
+        let _ = writeln!(s, "    {}", f.file_name(&shot.name));
+    }
+    if shot.output.preview {
+        let _ = writeln!(s, "    {}.preview.png", shot.name);
+    }
+    s
+}

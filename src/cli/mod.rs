@@ -1,0 +1,90 @@
+//! The command line: `bake`, `check`, `bench`, `eval`, `calibrate`. `main.rs` only calls
+//! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
+
+mod bake;
+mod bench;
+mod check;
+pub mod progress;
+
+use crate::error::Error;
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(name = "beeswarm", version, about = "Simulate honeybee swarms and bake them into glTF, USD and CSV caches.", long_about = None,
+    after_help = "Examples:\n  beeswarm bake                      bake the built-in demo shot into ./out/\n  beeswarm bake shot.toml --format usda,csv\n  beeswarm check shot.toml\n  beeswarm bench --bees 10000 --frames 48")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    Bake(bake::BakeArgs),
+    Check(check::CheckArgs),
+    Bench(bench::BenchArgs),
+}
+
+/// Parses arguments, runs the command, prints any error, returns the exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    let result = match cli.command {
+        Command::Bake(a) => bake::run(a),
+        Command::Check(a) => check::run(a),
+        Command::Bench(a) => bench::run(a),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => report(&e),
+    }
+}
+
+/// Prints an error for a person and returns its exit code.
+pub fn report(e: &Error) -> i32 {
+    eprintln!("error: {e}");
+    e.exit_code()
+}
+
+/// Parses `START:END` (inclusive frames).
+pub fn parse_frames(s: &str) -> Result<(i32, i32), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("expected START:END, e.g. 1:120, found \"{s}\""))?;
+    let a: i32 = a
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a whole start frame, found \"{a}\""))?;
+    let b: i32 = b
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a whole end frame, found \"{b}\""))?;
+    if a > b {
+        return Err(format!(
+            "the frame range {a}:{b} is reversed; write {b}:{a}"
+        ));
+    }
+    Ok((a, b))
+}
+
+/// Parses a comma-separated list of formats.
+pub fn parse_formats(s: &str) -> Result<Vec<crate::export::Format>, String> {
+    let mut out = Vec::new();
+    for part in s.split(',') {
+        let f = crate::export::Format::parse(part).ok_or_else(|| {
+            format!(
+                "unknown format \"{}\": expected glb, gltf, usda or csv",
+                part.trim()
+            )
+        })?;
+        if !out.contains(&f) {
+            out.push(f);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,101 @@
+//! Body oscillation force F_o (paper 000 Sec. IV-A, Eq. 2–4).
+//!
+//! F_o = (thrust, lift, sway) = (m g θ_pitch, ½ ρ A |u|² l(θ_pitch), m g θ_roll) in the
+//! heading frame (X along the horizontal direction of travel, Y up, Z right). Angles enter
+//! Eq. 2 in radians (the small-angle decomposition of a tilted wing force); the lift
+//! coefficient l(α) of Fig. 4 takes degrees. See docs/model.md for the choices.
+
+use glam::Vec3;
+
+pub const AIR_DENSITY: f32 = 1.225;
+pub const GRAVITY: f32 = 9.81;
+
+/// Lift coefficient of Fig. 4, α in degrees.
+#[inline]
+pub fn lift_coefficient(alpha_deg: f32) -> f32 {
+    -0.00095953 * alpha_deg * alpha_deg + 0.090635 * alpha_deg - 0.34182
+}
+
+/// Eq. 3: pitch angle (degrees) at maneuvering time t (in the equation's time units).
+#[inline]
+pub fn pitch_deg(t: f64) -> f32 {
+    (16.429 + 3.5 * (std::f64::consts::PI * (t + 2.986) / 35.972).sin()) as f32
+}
+
+/// Eq. 4: roll angle (degrees) at maneuvering time t.
+#[inline]
+pub fn roll_deg(t: f64) -> f32 {
+    (-0.765 + 18.914 * (std::f64::consts::PI * (t + 38.298) / 91.775).sin()) as f32
+}
+
+/// Period of Eq. 3 in its own time units (2 × 35.972).
+pub const PITCH_PERIOD: f64 = 2.0 * 35.972;
+/// Period of Eq. 4 in its own time units (2 × 91.775).
+pub const ROLL_PERIOD: f64 = 2.0 * 91.775;
+
+/// Mean of l(θ_pitch(t)) over one pitch cycle: l is quadratic, so the mean is
+/// l(mean angle) + c₂ · amplitude² / 2.
+pub fn mean_lift_coefficient() -> f32 {
+    lift_coefficient(16.429) + (-0.00095953) * 3.5 * 3.5 / 2.0
+}
+
+/// Mean thrust per unit mass over a pitch cycle, m/s² (g × mean pitch in radians).
+pub fn mean_thrust_accel() -> f32 {
+    GRAVITY * 16.429f32.to_radians()
+}
+
+/// F_o / m in the heading frame (m/s²). `air_speed` is |u| relative to the air. The lift
+/// is taken relative to its cycle mean: the mean wing lift carries the bee's weight, which
+/// the paper does not model, so only the oscillating part moves the body (docs/model.md).
+#[inline]
+pub fn accel(
+    pitch_deg: f32,
+    roll_deg: f32,
+    air_speed: f32,
+    mass: f32,
+    wing_area: f32,
+    mean_cl: f32,
+) -> Vec3 {
+    let thrust = GRAVITY * pitch_deg.to_radians();
+    let lift = 0.5
+        * AIR_DENSITY
+        * wing_area
+        * air_speed
+        * air_speed
+        * (lift_coefficient(pitch_deg) - mean_cl)
+        / mass;
+    let sway = GRAVITY * roll_deg.to_radians();
+    Vec3::new(thrust, lift, sway)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fig4_polynomial_and_eq3_eq4_ranges() {
+        assert!((lift_coefficient(16.429) - 0.8884).abs() < 1e-3);
+        let (mut pmin, mut pmax, mut rmin, mut rmax) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+        for i in 0..2000 {
+            let t = i as f64 * 0.1;
+            pmin = pmin.min(pitch_deg(t));
+            pmax = pmax.max(pitch_deg(t));
+            rmin = rmin.min(roll_deg(t));
+            rmax = rmax.max(roll_deg(t));
+        }
+        // The paper: pitch and roll stay small (≤ 20°).
+        assert!((pmin - 12.929).abs() < 0.01 && (pmax - 19.929).abs() < 0.01);
+        assert!((rmin + 19.679).abs() < 0.01 && (rmax - 18.149).abs() < 0.01);
+    }
+
+    #[test]
+    fn oscillating_lift_averages_to_zero_over_a_cycle() {
+        let cl = mean_lift_coefficient();
+        let n = 10000;
+        let mean: f64 = (0..n)
+            .map(|i| (lift_coefficient(pitch_deg(i as f64 * PITCH_PERIOD / n as f64)) - cl) as f64)
+            .sum::<f64>()
+            / n as f64;
+        assert!(mean.abs() < 1e-5, "{mean}");
+    }
+}

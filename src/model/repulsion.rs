@@ -1,0 +1,99 @@
+//! Repulsion between bees, and between bees and targets, from SPH pressure
+//! (paper 000 Sec. V-B, Eq. 10–11).
+//!
+//! Bees are capsules of radius r: the kernel distance is s = max(|rᵢ − rⱼ| − 2r, 0).
+//! Density (Eq. 10): ρᵢ = Σⱼ mⱼ W_poly6(s, h). Pressure: pᵢ = k (ρᵢ − ρ₀) with ρ₀ the
+//! density of a lone bee, clamped at 0 so neighbours only ever push (no tensile pull).
+//! Force (Eq. 11, Müller's symmetric form, see docs/model.md):
+//! aᵢ = −Σⱼ mⱼ (pᵢ + pⱼ) / (2 ρᵢ ρⱼ) ∇W_spiky(s, h).
+
+use super::kernels::{poly6, spiky_grad};
+use glam::Vec3;
+
+/// Kernel distance between two capsule bodies (or a body and a point).
+#[inline]
+pub fn kernel_distance(dist: f32, contact: f32) -> f32 {
+    (dist - contact).max(0.0)
+}
+
+/// One neighbour's contribution to the density (Eq. 10).
+#[inline]
+pub fn density_term(mass_j: f32, dist: f32, contact: f32, h: f32) -> f32 {
+    mass_j * poly6(kernel_distance(dist, contact), h)
+}
+
+/// Pressure from density (equation of state), clamped to push only.
+#[inline]
+pub fn pressure(stiffness: f32, density: f32, rest_density: f32) -> f32 {
+    stiffness * (density - rest_density).max(0.0)
+}
+
+/// One neighbour's contribution to the repulsion acceleration (Eq. 11).
+/// `r` is (bee − neighbour); `fallback` separates coincident bodies deterministically.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn pressure_term(
+    r: Vec3,
+    dist: f32,
+    contact: f32,
+    h: f32,
+    mass_j: f32,
+    p_i: f32,
+    p_j: f32,
+    rho_i: f32,
+    rho_j: f32,
+    fallback: Vec3,
+) -> Vec3 {
+    let s = kernel_distance(dist, contact);
+    if s >= h || rho_i <= 0.0 || rho_j <= 0.0 {
+        return Vec3::ZERO;
+    }
+    -spiky_grad(r, dist, s, h, fallback) * (mass_j * (p_i + p_j) / (2.0 * rho_i * rho_j))
+}
+
+/// Points evenly spread on a sphere (Fibonacci lattice): the static virtual particles that
+/// sample a target's body so approaching bees are pushed back (Sec. V-B).
+pub fn sphere_samples(center: Vec3, radius: f32, spacing: f32) -> Vec<Vec3> {
+    let area = 4.0 * std::f32::consts::PI * radius * radius;
+    let n = ((area / (spacing * spacing)).ceil() as usize).clamp(12, 2000);
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - y * y).max(0.0).sqrt();
+            let a = golden * i as f32;
+            center + Vec3::new(r * a.cos(), y, r * a.sin()) * radius
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pressure_pushes_bees_apart() {
+        let h = 0.15;
+        let m = 1e-4;
+        let rho0 = density_term(m, 0.0, 0.004, h);
+        let d = 0.05;
+        let rho = rho0 + density_term(m, d, 0.004, h);
+        let p = pressure(1.0, rho, rho0);
+        assert!(p > 0.0);
+        let a = pressure_term(Vec3::X * d, d, 0.004, h, m, p, p, rho, rho, Vec3::Y);
+        assert!(a.x > 0.0 && a.y == 0.0, "{a}");
+        // Coincident bees still get a finite push.
+        let a0 = pressure_term(Vec3::ZERO, 0.0, 0.004, h, m, p, p, rho, rho, Vec3::Y);
+        assert!(a0.is_finite() && a0.y > 0.0);
+    }
+
+    #[test]
+    fn sphere_samples_lie_on_the_sphere() {
+        let s = sphere_samples(Vec3::ONE, 0.1, 0.03);
+        assert!(s.len() >= 12);
+        assert!(
+            s.iter()
+                .all(|p| ((*p - Vec3::ONE).length() - 0.1).abs() < 1e-5)
+        );
+    }
+}

@@ -1,0 +1,104 @@
+//! Visually based obstacle sensing and roll-to-avoid (paper 000 Sec. IV-B, Eq. 5–7).
+
+use glam::Vec3;
+
+/// Bridson's ramp, ramp(x) = 15/8 x − 10/8 x³ + 3/8 x⁵ on [−1, 1], ±1 outside.
+#[inline]
+pub fn ramp(x: f32) -> f32 {
+    if x >= 1.0 {
+        1.0
+    } else if x <= -1.0 {
+        -1.0
+    } else {
+        let x2 = x * x;
+        x * (15.0 / 8.0 - x2 * (10.0 / 8.0 - x2 * 3.0 / 8.0))
+    }
+}
+
+/// Whether a surface point at offset `r_e` from the bee lies within the field of view
+/// around the body axis `o` (half-angle in degrees; the paper uses ±45°).
+#[inline]
+pub fn in_view(o: Vec3, r_e: Vec3, half_angle_deg: f32) -> bool {
+    let denom = o.length() * r_e.length();
+    if denom <= 1e-12 {
+        // On the surface itself: the obstacle fills the view.
+        return true;
+    }
+    o.dot(r_e) / denom >= half_angle_deg.to_radians().cos()
+}
+
+/// Eq. 5, read so that the normal component vanishes at the surface while the tangential
+/// (slipping) component is kept: u* = u − (1 − γ) n (n·u), γ = |ramp(d/d0)|, applied only
+/// while the bee moves towards the surface (docs/model.md explains the reading).
+#[inline]
+pub fn tune_velocity(u: Vec3, n: Vec3, d: f32, d0: f32) -> Vec3 {
+    let un = n.dot(u);
+    if un >= 0.0 || d >= d0 {
+        return u;
+    }
+    let gamma = ramp((d / d0).max(0.0)).abs();
+    u - n * ((1.0 - gamma) * un)
+}
+
+/// Eq. 7: y = ŷ · (o × r_e). Positive when the obstacle is on the bee's left.
+#[inline]
+pub fn side(o: Vec3, r_e: Vec3) -> f32 {
+    o.cross(r_e).y
+}
+
+/// Eq. 6 as the text describes it: the roll grows as the bee approaches (largest at the
+/// surface, d = 0) and fades towards the threshold d0: θ = sign(y) θmax exp(−½ (2d/d0)²).
+/// Positive roll drops the right wing, so the sway force (Eq. 2) pushes the bee right, away
+/// from an obstacle on its left.
+#[inline]
+pub fn avoid_roll_deg(y: f32, d: f32, d0: f32, roll_max_deg: f32) -> f32 {
+    let sign = if y >= 0.0 { 1.0 } else { -1.0 };
+    let x = 2.0 * d.max(0.0) / d0;
+    sign * roll_max_deg * (-0.5 * x * x).exp()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_matches_bridson() {
+        assert_eq!(ramp(0.0), 0.0);
+        assert!((ramp(1.0) - 1.0).abs() < 1e-6);
+        assert!((ramp(0.5) - (15.0 / 16.0 - 10.0 / 64.0 + 3.0 / 256.0)).abs() < 1e-6);
+        // Monotone on [0, 1].
+        assert!((0..100).all(|i| ramp(i as f32 / 100.0) < ramp((i + 1) as f32 / 100.0)));
+    }
+
+    #[test]
+    fn tuned_velocity_has_no_normal_component_at_the_surface_and_keeps_slip() {
+        let n = Vec3::X;
+        let u = Vec3::new(-2.0, 0.0, 1.0);
+        let at = tune_velocity(u, n, 0.0, 0.1);
+        assert!(at.x.abs() < 1e-6 && (at.z - 1.0).abs() < 1e-6);
+        assert_eq!(tune_velocity(u, n, 0.2, 0.1), u);
+        // Moving away is never altered.
+        assert_eq!(tune_velocity(-u, n, 0.01, 0.1), -u);
+    }
+
+    #[test]
+    fn roll_direction_is_away_from_the_obstacle() {
+        let o = Vec3::X; // flying along +X; +Z is right, −Z is left
+        let left = Vec3::new(0.5, 0.0, -0.5);
+        let right = Vec3::new(0.5, 0.0, 0.5);
+        assert!(side(o, left) > 0.0 && side(o, right) < 0.0);
+        // Obstacle on the left: positive roll (right wing down), sway pushes right (+Z).
+        assert!(avoid_roll_deg(side(o, left), 0.05, 0.1, 45.0) > 0.0);
+        assert!(avoid_roll_deg(side(o, right), 0.05, 0.1, 45.0) < 0.0);
+        // The roll grows as the bee approaches.
+        assert!(avoid_roll_deg(1.0, 0.01, 0.1, 45.0) > avoid_roll_deg(1.0, 0.08, 0.1, 45.0));
+        assert!((avoid_roll_deg(1.0, 0.0, 0.1, 45.0) - 45.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn field_of_view_is_plus_minus_45_degrees() {
+        assert!(in_view(Vec3::X, Vec3::new(1.0, 0.0, 0.9), 45.0));
+        assert!(!in_view(Vec3::X, Vec3::new(1.0, 0.0, 1.1), 45.0));
+        assert!(!in_view(Vec3::X, -Vec3::X, 45.0));
+    }
+}

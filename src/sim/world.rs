@@ -1,0 +1,616 @@
+//! The world: every bee's state, the fields and targets, and the fixed-step integrator.
+//!
+//! Each substep reads the previous state and writes a new one bee by bee (in parallel);
+//! neighbour sums run in grid order, so results are identical for any number of threads.
+
+use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
+use super::grid::Grid;
+use super::obstacle;
+use crate::field::CurlNoise;
+use crate::math::{self, Rng, normalize_or};
+use crate::model::{boids, brownian, collision, oscillation, repulsion, targets, vision};
+use crate::shot::{ModelKind, Region, Shot, TargetKind};
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
+
+/// Time constants of the body's attitude, seconds: how fast the heading follows the
+/// velocity (a short lag lets a pushed-back bee fly backwards briefly, as real bees do),
+/// how fast the roll reaches its target, and the smoothing of the mean path for sway.
+const YAW_LAG_S: f32 = 0.06;
+const ROLL_LAG_S: f32 = 0.08;
+const SWAY_PATH_S: f32 = 0.3;
+
+/// One bee's state.
+#[derive(Clone, Copy, Debug)]
+struct Bee {
+    pos: Vec3,
+    vel: Vec3,
+    /// Exponentially smoothed path; sway is the lateral offset from it.
+    mean_pos: Vec3,
+    /// Heading about +Y, radians.
+    yaw: f32,
+    pitch_deg: f32,
+    roll_deg: f32,
+    orient: Quat,
+    /// rad/s, world frame.
+    ang_vel: Vec3,
+    density: f32,
+    pressure: f32,
+    swarm: u32,
+    /// Body scale and preferred speed (per-bee variation), oscillation phases in the
+    /// maneuvering functions' own time units.
+    size: f32,
+    speed: f32,
+    phase_pitch: f32,
+    phase_roll: f32,
+}
+
+/// Per-swarm constants, precomputed in f32.
+struct SwarmRt {
+    model: ModelKind,
+    k1: f32,
+    k2: f32,
+    k3: f32,
+    h: f32,
+    d0: f32,
+    fov: f32,
+    roll_max: f32,
+    time_unit: f64,
+    stiffness: f32,
+    spring: f32,
+    attraction: f32,
+    containment: f32,
+    mass: f32,
+    radius: f32,
+    wing_area: f32,
+    mean_cl: f32,
+    curl: CurlNoise,
+    bounds: Option<(Vec3, Vec3)>,
+    /// Targets attracting this swarm.
+    targets: Vec<usize>,
+}
+
+/// A target's static virtual particles (offsets from its centre) and current centre.
+struct TargetRt {
+    offsets: Vec<Vec3>,
+    center: Vec3,
+    bounding: f32,
+}
+
+/// A running simulation of a shot.
+pub struct Simulation {
+    shot: Shot,
+    swarms: Vec<SwarmRt>,
+    targets: Vec<TargetRt>,
+    bees: Vec<Bee>,
+    next: Vec<Bee>,
+    positions: Vec<Vec3>,
+    grid: Grid,
+    grid_cell: f32,
+    frame: i32,
+    step_index: u64,
+    record: Vec<SwarmFrame>,
+}
+
+impl Simulation {
+    pub fn new(shot: &Shot) -> Self {
+        let shot = shot.clone();
+        let swarms: Vec<SwarmRt> = shot
+            .swarms
+            .iter()
+            .enumerate()
+            .map(|(si, s)| {
+                let p = &s.params;
+                SwarmRt {
+                    model: s.model,
+                    k1: p.kappa1 as f32,
+                    k2: p.kappa2 as f32,
+                    k3: p.kappa3 as f32,
+                    h: p.neighbour_radius as f32,
+                    d0: p.avoid_distance as f32,
+                    fov: p.fov_deg as f32,
+                    roll_max: p.roll_max_deg as f32,
+                    time_unit: p.oscillation_time_unit,
+                    stiffness: p.pressure_stiffness as f32,
+                    spring: p.collision_stiffness as f32,
+                    attraction: p.attraction as f32,
+                    containment: p.containment as f32,
+                    mass: s.bee.mass,
+                    radius: s.bee.radius,
+                    wing_area: s.bee.wing_area,
+                    mean_cl: oscillation::mean_lift_coefficient(),
+                    curl: CurlNoise::new(
+                        math::mix64(shot.seed ^ (si as u64 + 1) * 0x51ED),
+                        p.noise_cell,
+                        p.noise_gain,
+                    ),
+                    bounds: s.bounds,
+                    targets: shot
+                        .targets
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, t)| t.swarms.contains(&si))
+                        .map(|(ti, _)| ti)
+                        .collect(),
+                }
+            })
+            .collect();
+        let spacing = swarms.iter().map(|s| s.h).fold(f32::INFINITY, f32::min) * 0.4;
+        let targets = shot
+            .targets
+            .iter()
+            .map(|t| {
+                let offsets = match t.kind {
+                    TargetKind::Attractor => Vec::new(),
+                    _ => {
+                        repulsion::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
+                    }
+                };
+                TargetRt {
+                    offsets,
+                    center: t.position_at(shot.frame_start as f64),
+                    bounding: t.radius,
+                }
+            })
+            .collect();
+        let max_size = shot
+            .swarms
+            .iter()
+            .map(|s| 1.0 + s.variation.size)
+            .fold(1.0, f32::max);
+        let grid_cell = swarms
+            .iter()
+            .map(|s| s.h + 2.0 * s.radius * max_size)
+            .fold(0.0, f32::max);
+
+        let mut bees = Vec::with_capacity(shot.bee_count());
+        for (si, s) in shot.swarms.iter().enumerate() {
+            for k in 0..s.count {
+                let mut rng = Rng::new(shot.seed, si as u64, k as u64);
+                let mut pos = match s.spawn {
+                    Region::Box { center, half } => {
+                        center
+                            + Vec3::new(
+                                rng.range(-1.0, 1.0),
+                                rng.range(-1.0, 1.0),
+                                rng.range(-1.0, 1.0),
+                            ) * half
+                    }
+                    Region::Sphere { center, radius } => loop {
+                        let v = Vec3::new(
+                            rng.range(-1.0, 1.0),
+                            rng.range(-1.0, 1.0),
+                            rng.range(-1.0, 1.0),
+                        );
+                        if v.length_squared() <= 1.0 {
+                            break center + v * radius;
+                        }
+                    },
+                };
+                let var = s.variation;
+                let size = 1.0 + var.size * rng.range(-1.0, 1.0);
+                let speed = s.params.speed as f32 * (1.0 + var.speed * rng.range(-1.0, 1.0));
+                // A bee spawned inside an obstacle starts just outside its surface.
+                let r = s.bee.radius * size;
+                for o in &shot.obstacles {
+                    let q = obstacle::query(&o.shape, pos);
+                    if q.distance < r {
+                        pos = q.point + q.normal * (r + 1e-3);
+                    }
+                }
+                let dir = normalize_or(
+                    Vec3::new(
+                        rng.range(-1.0, 1.0),
+                        rng.range(-0.2, 0.2),
+                        rng.range(-1.0, 1.0),
+                    ),
+                    Vec3::X,
+                );
+                let vel = dir * speed;
+                let yaw = math::yaw_of(dir);
+                let phase_pitch = var.phase * rng.f32() * oscillation::PITCH_PERIOD as f32;
+                let phase_roll = var.phase * rng.f32() * oscillation::ROLL_PERIOD as f32;
+                let model = s.model;
+                let (pitch_deg, roll_deg) = match model {
+                    ModelKind::Bee => (
+                        oscillation::pitch_deg(phase_pitch as f64),
+                        oscillation::roll_deg(phase_roll as f64),
+                    ),
+                    _ => (0.0, 0.0),
+                };
+                bees.push(Bee {
+                    pos,
+                    vel,
+                    mean_pos: pos,
+                    yaw,
+                    pitch_deg,
+                    roll_deg,
+                    orient: math::body_orientation(
+                        yaw,
+                        pitch_deg.to_radians(),
+                        roll_deg.to_radians(),
+                    ),
+                    ang_vel: Vec3::ZERO,
+                    density: 0.0,
+                    pressure: 0.0,
+                    swarm: si as u32,
+                    size,
+                    speed,
+                    phase_pitch,
+                    phase_roll,
+                });
+            }
+        }
+        let mut sim = Simulation {
+            frame: shot.frame_start,
+            shot,
+            swarms,
+            targets,
+            next: bees.clone(),
+            bees,
+            positions: Vec::new(),
+            grid: Grid::default(),
+            grid_cell,
+            step_index: 0,
+            record: Vec::new(),
+        };
+        sim.update_record();
+        sim
+    }
+
+    pub fn shot(&self) -> &Shot {
+        &self.shot
+    }
+
+    /// The current frame number.
+    pub fn frame(&self) -> i32 {
+        self.frame
+    }
+
+    /// True once the last frame of the range has been reached.
+    pub fn done(&self) -> bool {
+        self.frame >= self.shot.frame_end
+    }
+
+    /// Seconds since the first frame.
+    pub fn time(&self) -> f64 {
+        (self.frame - self.shot.frame_start) as f64 / self.shot.fps
+    }
+
+    /// The state at the current frame, one entry per swarm.
+    pub fn record(&self) -> &[SwarmFrame] {
+        &self.record
+    }
+
+    pub fn meta(&self) -> CacheMeta {
+        CacheMeta {
+            shot_name: self.shot.name.clone(),
+            fps: self.shot.fps,
+            frame_start: self.shot.frame_start,
+            frame_end: self.shot.frame_end,
+            seed: self.shot.seed,
+            tool_version: env!("CARGO_PKG_VERSION").to_owned(),
+            swarms: self
+                .shot
+                .swarms
+                .iter()
+                .map(|s| SwarmMeta {
+                    name: s.name.clone(),
+                    count: s.count,
+                    bee_length_m: s.bee.length,
+                    wing_beat_hz: s.bee.wing_beat_hz,
+                })
+                .collect(),
+        }
+    }
+
+    /// Advances one frame (`substeps` integration steps) and records it.
+    pub fn advance(&mut self) {
+        let dt = self.shot.dt() as f32;
+        for k in 0..self.shot.substeps {
+            let t = self.time() + (k as f64) * self.shot.dt();
+            self.step(t, dt);
+        }
+        self.frame += 1;
+        self.update_record();
+    }
+
+    fn update_targets(&mut self, t: f64) {
+        let frame = self.shot.frame_start as f64 + t * self.shot.fps;
+        for (rt, target) in self.targets.iter_mut().zip(&self.shot.targets) {
+            rt.center = target.position_at(frame);
+        }
+    }
+
+    /// One integration step of `dt` seconds starting at time `t`.
+    fn step(&mut self, t: f64, dt: f32) {
+        self.update_targets(t);
+        self.positions.clear();
+        self.positions.extend(self.bees.iter().map(|b| b.pos));
+        self.grid.build(&self.positions, self.grid_cell);
+
+        // Pass 1: density and pressure (Eq. 10) for bees of the bee model.
+        let densities: Vec<(f32, f32)> = (0..self.bees.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|i| self.density(i))
+            .collect();
+        for (b, (d, p)) in self.bees.iter_mut().zip(densities) {
+            b.density = d;
+            b.pressure = p;
+        }
+        // Pass 2: forces and integration.
+        let step_index = self.step_index;
+        let next: Vec<Bee> = (0..self.bees.len())
+            .into_par_iter()
+            .with_min_len(128)
+            .map(|i| self.integrate(i, t, dt, step_index))
+            .collect();
+        self.next = next;
+        std::mem::swap(&mut self.bees, &mut self.next);
+        self.step_index += 1;
+    }
+
+    fn density(&self, i: usize) -> (f32, f32) {
+        let b = &self.bees[i];
+        let s = &self.swarms[b.swarm as usize];
+        if s.model != ModelKind::Bee {
+            return (0.0, 0.0);
+        }
+        let ri = s.radius * b.size;
+        let mut rho = 0.0;
+        self.grid.for_each_near(b.pos, |j| {
+            let o = &self.bees[j];
+            let so = &self.swarms[o.swarm as usize];
+            let dist = b.pos.distance(o.pos);
+            rho += repulsion::density_term(so.mass, dist, ri + so.radius * o.size, s.h);
+        });
+        for &ti in &s.targets {
+            let tr = &self.targets[ti];
+            if b.pos.distance(tr.center) > tr.bounding + s.h + ri {
+                continue;
+            }
+            for off in &tr.offsets {
+                rho += repulsion::density_term(s.mass, b.pos.distance(tr.center + *off), ri, s.h);
+            }
+        }
+        let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
+        (rho, repulsion::pressure(s.stiffness, rho, rest))
+    }
+
+    /// A deterministic direction separating coincident bees i and j (opposite for j and i).
+    fn separation_fallback(i: usize, j: usize) -> Vec3 {
+        let (a, b, sign) = if i < j { (i, j, 1.0) } else { (j, i, -1.0) };
+        Rng::new(a as u64, b as u64, 0x5EA).unit_vector() * sign
+    }
+
+    fn integrate(&self, i: usize, t: f64, dt: f32, step_index: u64) -> Bee {
+        let b = self.bees[i];
+        let s = &self.swarms[b.swarm as usize];
+        let shot = &self.shot;
+        let wind = shot.wind;
+        let ri = s.radius * b.size;
+        let mut out = b;
+
+        // Neighbours: pressure repulsion (Eq. 11), contact springs (Sec. VII), boids rules.
+        let mut a_rep = Vec3::ZERO;
+        let mut a_col = Vec3::ZERO;
+        let mut hood = boids::Neighbourhood::default();
+        self.grid.for_each_near(b.pos, |j| {
+            if j == i {
+                return;
+            }
+            let o = &self.bees[j];
+            let so = &self.swarms[o.swarm as usize];
+            let r = b.pos - o.pos;
+            let dist = r.length();
+            let contact = ri + so.radius * o.size;
+            if dist >= s.h + contact {
+                return;
+            }
+            let fallback = Self::separation_fallback(i, j);
+            match s.model {
+                ModelKind::Bee => {
+                    let rho_j = if o.density > 0.0 {
+                        o.density
+                    } else {
+                        b.density
+                    };
+                    a_rep += repulsion::pressure_term(
+                        r,
+                        dist,
+                        contact,
+                        s.h,
+                        so.mass,
+                        b.pressure,
+                        o.pressure.max(0.0),
+                        b.density,
+                        rho_j,
+                        fallback,
+                    );
+                }
+                ModelKind::Boids => {
+                    hood.count += 1;
+                    hood.velocity_sum += o.vel;
+                    hood.position_sum += o.pos;
+                    if dist < s.h * 0.5 {
+                        hood.separation += if dist > 1e-6 {
+                            r / (dist * dist)
+                        } else {
+                            fallback * 1e3
+                        };
+                    }
+                }
+                ModelKind::Brownian => {}
+            }
+            a_col += collision::spring_accel(r, dist, contact, b.vel - o.vel, s.spring, fallback);
+        });
+
+        // Targets: attraction, and the push of their virtual particles.
+        let mut a_attr = Vec3::ZERO;
+        for &ti in &s.targets {
+            let target = &shot.targets[ti];
+            let tr = &self.targets[ti];
+            a_attr += targets::attraction(
+                b.pos,
+                tr.center,
+                target.strength * s.attraction,
+                target.reach,
+            );
+            if s.model == ModelKind::Bee && b.pos.distance(tr.center) <= tr.bounding + s.h + ri {
+                let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
+                for (k, off) in tr.offsets.iter().enumerate() {
+                    let r = b.pos - (tr.center + *off);
+                    let dist = r.length();
+                    let fallback = normalize_or(*off, Vec3::Y);
+                    let _ = k;
+                    a_rep += repulsion::pressure_term(
+                        r, dist, ri, s.h, s.mass, b.pressure, b.pressure, b.density, rest, fallback,
+                    );
+                }
+            }
+        }
+        if let Some((c, h)) = s.bounds {
+            a_attr += targets::containment(b.pos, c, h, s.containment);
+        }
+
+        // Model-specific acceleration.
+        let air = b.vel - wind;
+        let heading = Quat::from_rotation_y(b.yaw);
+        let mut gamma = 1.0f32;
+        let a = match s.model {
+            ModelKind::Bee => {
+                let tt = t / s.time_unit;
+                out.pitch_deg = oscillation::pitch_deg(tt + b.phase_pitch as f64);
+                let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
+                // Vision (Sec. IV-B): the nearest obstacle seen within d0 takes over the roll.
+                let forward =
+                    heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
+                let mut nearest = f32::INFINITY;
+                for o in &shot.obstacles {
+                    let q = obstacle::query(&o.shape, b.pos);
+                    let d = q.distance - ri;
+                    let r_e = q.point - b.pos;
+                    if d < s.d0 && d < nearest && vision::in_view(forward, r_e, s.fov) {
+                        nearest = d;
+                        roll_target =
+                            vision::avoid_roll_deg(vision::side(forward, r_e), d, s.d0, s.roll_max);
+                        gamma = vision::ramp((d / s.d0).max(0.0)).abs();
+                    }
+                }
+                out.roll_deg =
+                    b.roll_deg + (roll_target - b.roll_deg) * (1.0 - (-dt / ROLL_LAG_S).exp());
+                let f_o = oscillation::accel(
+                    out.pitch_deg,
+                    out.roll_deg,
+                    air.length(),
+                    s.mass,
+                    s.wing_area,
+                    s.mean_cl,
+                );
+                let a_o = heading * f_o;
+                // Linear drag sized so that mean thrust balances at the preferred speed.
+                let drag = s.k1 * oscillation::mean_thrust_accel() / b.speed.max(1e-3);
+                // Eq. 1, plus the terms the paper leaves implicit (docs/model.md). While
+                // avoiding, the other rules are faded out by the ramp γ.
+                s.k1 * a_o + gamma * (s.k2 * s.curl.force(b.pos) + a_attr) + s.k3 * a_rep
+                    - air * drag
+            }
+            ModelKind::Brownian => {
+                let mut rng = Rng::new(shot.seed ^ 0xB12, i as u64, step_index);
+                let xi = Vec3::new(rng.gaussian(), rng.gaussian(), rng.gaussian());
+                brownian::accel(b.vel, wind, b.speed, xi, dt) + a_attr
+            }
+            ModelKind::Boids => boids::accel(b.pos, b.vel, &hood, b.speed) + a_attr,
+        };
+        let a = math::finite_or_zero(a + a_col);
+
+        // Semi-implicit Euler, then obstacle velocity tuning (Eq. 5) and a hard guard.
+        let mut vel = b.vel + a * dt;
+        for o in &shot.obstacles {
+            let q = obstacle::query(&o.shape, b.pos);
+            vel = vision::tune_velocity(vel, q.normal, q.distance - ri, s.d0);
+        }
+        let max_speed = 4.0 * b.speed + 2.0;
+        if vel.length() > max_speed {
+            vel = vel.normalize() * max_speed;
+        }
+        let mut pos = b.pos + vel * dt;
+        for o in &shot.obstacles {
+            let q = obstacle::query(&o.shape, pos);
+            if q.distance < ri {
+                // Numerically the ramp can leave a sliver of approach; never let a body in.
+                pos = q.point + q.normal * ri;
+                let vn = vel.dot(q.normal);
+                if vn < 0.0 {
+                    vel -= q.normal * vn;
+                }
+            }
+        }
+        if !pos.is_finite() || !vel.is_finite() {
+            pos = b.pos;
+            vel = Vec3::ZERO;
+        }
+        out.pos = pos;
+        out.vel = vel;
+
+        let horizontal = Vec3::new(vel.x, 0.0, vel.z);
+        if horizontal.length() > 0.02 {
+            let target = math::yaw_of(horizontal);
+            let mut dy = target - b.yaw;
+            dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
+                - std::f32::consts::PI;
+            out.yaw =
+                (b.yaw + dy * (1.0 - (-dt / YAW_LAG_S).exp())).rem_euclid(std::f32::consts::TAU);
+        }
+        out.mean_pos = b.mean_pos + (pos - b.mean_pos) * (1.0 - (-dt / SWAY_PATH_S).exp());
+        out.orient = math::body_orientation(
+            out.yaw,
+            out.pitch_deg.to_radians(),
+            out.roll_deg.to_radians(),
+        );
+        out.ang_vel = math::angular_velocity(b.orient, out.orient, dt);
+        out
+    }
+
+    fn update_record(&mut self) {
+        let mut id = 0u64;
+        let mut rec = std::mem::take(&mut self.record);
+        rec.resize_with(self.shot.swarms.len(), SwarmFrame::default);
+        let mut start = 0;
+        for (si, s) in self.shot.swarms.iter().enumerate() {
+            let bees = &self.bees[start..start + s.count];
+            let f = &mut rec[si];
+            f.ids.clear();
+            f.ids.extend((0..s.count as u64).map(|k| id + k));
+            f.position.clear();
+            f.position.extend(bees.iter().map(|b| b.pos));
+            f.velocity.clear();
+            f.velocity.extend(bees.iter().map(|b| b.vel));
+            f.orientation.clear();
+            f.orientation.extend(bees.iter().map(|b| b.orient));
+            f.heading.clear();
+            f.heading
+                .extend(bees.iter().map(|b| Quat::from_rotation_y(b.yaw)));
+            f.pitch_deg.clear();
+            f.pitch_deg.extend(bees.iter().map(|b| b.pitch_deg));
+            f.roll_deg.clear();
+            f.roll_deg.extend(bees.iter().map(|b| b.roll_deg));
+            f.sway_m.clear();
+            f.sway_m.extend(
+                bees.iter()
+                    .map(|b| (b.pos - b.mean_pos).dot(Quat::from_rotation_y(b.yaw) * Vec3::Z)),
+            );
+            f.angular_velocity_deg.clear();
+            f.angular_velocity_deg.extend(
+                bees.iter()
+                    .map(|b| b.ang_vel * (180.0 / std::f32::consts::PI)),
+            );
+            f.scale.clear();
+            f.scale.extend(bees.iter().map(|b| b.size));
+            id += s.count as u64;
+            start += s.count;
+        }
+        self.record = rec;
+    }
+}
