@@ -202,13 +202,26 @@ fn single_insect_data_reports_neighbour_metrics_as_not_applicable() {
     assert_eq!(Summary::of(&[]).n, 0);
 }
 
+/// The recording at `<repo>/../shared/data/`, or in `$BEESWARM_DATA_DIR` (for work trees
+/// that do not sit beside shared/).
 fn mosquito_file() -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/mosquito_flights.csv");
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: the mosquito recording is not at {}", p.display());
-        None
+    let beside =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/mosquito_flights.csv");
+    let from_env = std::env::var_os("BEESWARM_DATA_DIR")
+        .map(|d| PathBuf::from(d).join("mosquito_flights.csv"));
+    match [Some(beside.clone()), from_env]
+        .into_iter()
+        .flatten()
+        .find(|p| p.exists())
+    {
+        Some(p) => Some(p),
+        None => {
+            println!(
+                "skipped: the mosquito recording is not at {}",
+                beside.display()
+            );
+            None
+        }
     }
 }
 

@@ -34,6 +34,9 @@ pub struct EvalArgs {
     /// Write a PNG with the distributions overlaid here.
     #[arg(long, value_name = "FIG.png")]
     pub figure: Option<PathBuf>,
+    /// Write the table of distances and scores as Markdown here (for docs).
+    #[arg(long, value_name = "TABLE.md")]
+    pub markdown: Option<PathBuf>,
     /// Common time step in seconds [default: the coarsest native step of the inputs,
     /// so no data set is upsampled].
     #[arg(long, value_name = "S")]
@@ -144,6 +147,13 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         figure::draw(&report).save_png(path)?;
         eprintln!("wrote {}", path.display());
     }
+    if let Some(path) = &args.markdown {
+        let mut f = AtomicFile::create(path)?;
+        f.write_all(markdown_table(&report).as_bytes())
+            .map_err(|e| Error::io(path, e))?;
+        f.commit()?;
+        eprintln!("wrote {}", path.display());
+    }
     Ok(())
 }
 
@@ -204,6 +214,72 @@ pub fn print_table(r: &Report) {
         out.push('\n');
     }
     print!("{out}");
+    let _ = std::io::stdout().flush();
+}
+
+/// ΔE per metric (lowest in bold) and the scores, as a Markdown table.
+pub fn markdown_table(r: &Report) -> String {
+    let mut s = String::new();
+    s += &format!(
+        "Reference: `{}` ({} tracks, {:.0} s tracked). Common step {} s, {} shared bins.\n\n",
+        r.reference.name,
+        r.reference.tracks,
+        r.reference.tracked_seconds,
+        r.settings.dt,
+        r.settings.bins
+    );
+    s += "| metric | real median |";
+    for c in &r.candidates {
+        s += &format!(" ΔE {} |", c.name);
+    }
+    s += "\n|---|---:|";
+    s += &"---:|".repeat(r.candidates.len());
+    s.push('\n');
+    for m in &r.metrics {
+        if !m.applicable {
+            s += &format!(
+                "| {} | – | {} |\n",
+                m.metric.key(),
+                m.note.as_deref().unwrap_or("not applicable")
+            );
+            continue;
+        }
+        let best = m
+            .candidates
+            .iter()
+            .filter_map(|c| c.l1)
+            .fold(f64::INFINITY, f64::min);
+        s += &format!(
+            "| {} | {:.4} {} |",
+            m.metric.key(),
+            m.reference.median,
+            m.unit
+        );
+        for c in &m.candidates {
+            s += &match c.l1 {
+                Some(d) if d == best => format!(" **{d:.4}** |"),
+                Some(d) => format!(" {d:.4} |"),
+                None => " n/a |".to_owned(),
+            };
+        }
+        s.push('\n');
+    }
+    for (label, f) in [
+        (
+            "fitness q (single-insect mean)",
+            (|x: &super::report::CandidateScore| x.fitness) as fn(&_) -> f64,
+        ),
+        ("q over all applicable metrics", |x| x.q_all),
+        ("entropy-weighted score E (paper 002)", |x| x.entropy_score),
+        ("entropy-weighted q", |x| x.entropy_weighted_q),
+    ] {
+        s += &format!("| {label} | |");
+        for x in &r.scores {
+            s += &format!(" {:.4} |", f(x));
+        }
+        s.push('\n');
+    }
+    s
 }
 
 fn truncate(s: &str, n: usize) -> String {

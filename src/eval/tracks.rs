@@ -144,6 +144,9 @@ fn layout(header: &str) -> std::result::Result<Layout, String> {
     }
 }
 
+/// One row: time, position, velocity; `None` for a gap marker (a non-finite row).
+type Row = Option<(f64, DVec3, DVec3)>;
+
 /// Parses tracks text (see the module docs for the formats).
 pub fn parse(text: &str, name: &str) -> std::result::Result<Dataset, String> {
     let mut lines = text.lines().enumerate();
@@ -166,7 +169,7 @@ pub fn parse(text: &str, name: &str) -> std::result::Result<Dataset, String> {
     // Rows per id in file order. A non-finite row is kept as `None`: a gap marker.
     // Groups keep the order in which ids first appear, so track order follows the file.
     let mut index: HashMap<String, usize> = HashMap::new();
-    let mut groups: Vec<(String, Vec<Option<(f64, DVec3, DVec3)>>)> = Vec::new();
+    let mut groups: Vec<(String, Vec<Row>)> = Vec::new();
     for (n, line) in lines {
         if line.trim().is_empty() {
             continue;
@@ -216,7 +219,7 @@ pub fn parse(text: &str, name: &str) -> std::result::Result<Dataset, String> {
 }
 
 /// Splits one id's rows at gap markers, time reversals and time gaps.
-fn split_into(id: &str, rows: &[Option<(f64, DVec3, DVec3)>], out: &mut Vec<Track>) {
+fn split_into(id: &str, rows: &[Row], out: &mut Vec<Track>) {
     let mut steps: Vec<f64> = rows
         .windows(2)
         .filter_map(|w| match (w[0], w[1]) {

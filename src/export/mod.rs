@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod preview;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -79,10 +80,7 @@ pub fn open_preview(
     meta: &CacheMeta,
     dir: &Path,
 ) -> Result<Box<dyn CacheWriter>> {
-    let _ = (shot, meta, dir);
-    Err(Error::bake(
-        "the preview writer is not available in this build",
-    ))
+    Ok(Box::new(preview::PreviewWriter::create(shot, meta, dir)?))
 }
 
 /// Opens the writer for one format in `dir`.

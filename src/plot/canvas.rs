@@ -18,6 +18,8 @@ pub struct Canvas {
     height: u32,
     /// Row-major RGB, 3 bytes per pixel.
     px: Vec<u8>,
+    /// Drawing is limited to this rectangle (inclusive), e.g. a chart's plot area.
+    clip: (i64, i64, i64, i64),
 }
 
 impl Canvas {
@@ -26,7 +28,22 @@ impl Canvas {
         for _ in 0..width as usize * height as usize {
             px.extend_from_slice(&background);
         }
-        Canvas { width, height, px }
+        Canvas {
+            width,
+            height,
+            px,
+            clip: (0, 0, width as i64 - 1, height as i64 - 1),
+        }
+    }
+
+    /// Limits drawing to the rectangle (x0, y0)–(x1, y1) inclusive, within the canvas;
+    /// `None` restores the whole canvas.
+    pub fn set_clip(&mut self, rect: Option<(i64, i64, i64, i64)>) {
+        let (w, h) = (self.width as i64 - 1, self.height as i64 - 1);
+        self.clip = match rect {
+            Some((x0, y0, x1, y1)) => (x0.max(0), y0.max(0), x1.min(w), y1.min(h)),
+            None => (0, 0, w, h),
+        };
     }
 
     pub fn width(&self) -> u32 {
@@ -48,9 +65,10 @@ impl Canvas {
         Some([self.px[i], self.px[i + 1], self.px[i + 2]])
     }
 
-    /// Sets one pixel; outside the canvas it does nothing.
+    /// Sets one pixel; outside the canvas or the clip rectangle it does nothing.
     pub fn set(&mut self, x: i64, y: i64, c: Rgb) {
-        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+        let (x0, y0, x1, y1) = self.clip;
+        if x < x0 || y < y0 || x > x1 || y > y1 {
             return;
         }
         let i = (y as usize * self.width as usize + x as usize) * 3;
@@ -59,8 +77,8 @@ impl Canvas {
 
     /// Fills the rectangle with corners (x0, y0) and (x1, y1), both inclusive, any order.
     pub fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: Rgb) {
-        let (xa, xb) = (x0.min(x1).max(0), x0.max(x1).min(self.width as i64 - 1));
-        let (ya, yb) = (y0.min(y1).max(0), y0.max(y1).min(self.height as i64 - 1));
+        let (xa, xb) = (x0.min(x1).max(self.clip.0), x0.max(x1).min(self.clip.2));
+        let (ya, yb) = (y0.min(y1).max(self.clip.1), y0.max(y1).min(self.clip.3));
         for y in ya..=yb {
             for x in xa..=xb {
                 self.set(x, y, c);

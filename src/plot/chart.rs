@@ -53,7 +53,7 @@ pub fn tick_label(v: f64, step: f64) -> String {
 
 impl Chart {
     /// A chart whose ranges are widened when empty or degenerate, so mapping never
-    /// divides by zero.
+    /// divides by zero. A range given high-to-low flips that axis.
     pub fn new(left: i64, top: i64, right: i64, bottom: i64, x: (f64, f64), y: (f64, f64)) -> Self {
         Chart {
             left,
@@ -76,10 +76,23 @@ impl Chart {
         (self.px_x(x), self.px_y(y))
     }
 
+    /// Restricts drawing on `c` to the plot area (inside the frame) until `unclip`.
+    pub fn clip(&self, c: &mut Canvas) {
+        c.set_clip(Some((
+            self.left + 1,
+            self.top + 1,
+            self.right - 1,
+            self.bottom - 1,
+        )));
+    }
+    pub fn unclip(&self, c: &mut Canvas) {
+        c.set_clip(None);
+    }
+
     /// Draws the frame, light grid lines, ticks with labels, axis labels and a title.
     pub fn frame(&self, c: &mut Canvas, title: &str, xlabel: &str, ylabel: &str) {
-        let (xt, xs) = nice_ticks(self.x.0, self.x.1, 5);
-        let (yt, ys) = nice_ticks(self.y.0, self.y.1, 4);
+        let (xt, xs) = nice_ticks(self.x.0.min(self.x.1), self.x.0.max(self.x.1), 5);
+        let (yt, ys) = nice_ticks(self.y.0.min(self.y.1), self.y.0.max(self.y.1), 4);
         for &t in &xt {
             let px = self.px_x(t).round() as i64;
             c.fill_rect(px, self.top + 1, px, self.bottom - 1, palette::GRID);
@@ -196,7 +209,8 @@ fn widen((lo, hi): (f64, f64)) -> (f64, f64) {
         if lo.is_finite() { lo } else { 0.0 },
         if hi.is_finite() { hi } else { 1.0 },
     );
-    if hi > lo {
+    if hi != lo {
+        // A reversed range is kept: it flips the axis (e.g. a top view with +z down).
         (lo, hi)
     } else {
         let pad = if lo.abs() > 0.0 { lo.abs() * 0.5 } else { 0.5 };
