@@ -3,6 +3,44 @@
 use glam::Vec3;
 use std::f32::consts::PI;
 
+/// Both kernels for one radius h, with their normalisation constants computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct Kernels {
+    pub h: f32,
+    h2: f32,
+    poly6_coef: f32,
+    spiky_coef: f32,
+}
+
+impl Kernels {
+    pub fn new(h: f32) -> Self {
+        Kernels {
+            h,
+            h2: h * h,
+            poly6_coef: 315.0 / (64.0 * PI * h.powi(9)),
+            spiky_coef: 45.0 / (PI * h.powi(6)),
+        }
+    }
+    /// Poly6 W(s) for kernel distance s ≥ 0.
+    #[inline]
+    pub fn poly6(&self, s: f32) -> f32 {
+        if s >= self.h {
+            return 0.0;
+        }
+        let x = self.h2 - s * s;
+        self.poly6_coef * x * x * x
+    }
+    /// −dW_spiky/ds for kernel distance s ≥ 0.
+    #[inline]
+    pub fn spiky_grad_mag(&self, s: f32) -> f32 {
+        if s >= self.h {
+            return 0.0;
+        }
+        let x = self.h - s;
+        self.spiky_coef * x * x
+    }
+}
+
 /// Poly6 kernel W(s, h) = 315 / (64 π h⁹) (h² − s²)³ for 0 ≤ s ≤ h, else 0.
 #[inline]
 pub fn poly6(s: f32, h: f32) -> f32 {
@@ -70,6 +108,19 @@ mod tests {
             };
             let i = radial_integral(w, h);
             assert!((i - 1.0).abs() < 2e-3, "h={h}: {i}");
+        }
+    }
+
+    #[test]
+    fn precomputed_kernels_equal_the_formulas() {
+        let k = Kernels::new(0.15);
+        for i in 0..20 {
+            let s = i as f32 * 0.01;
+            assert!((k.poly6(s) - poly6(s, 0.15)).abs() <= 1e-6 * poly6(0.0, 0.15));
+            assert!(
+                (k.spiky_grad_mag(s) - spiky_grad_mag(s, 0.15)).abs()
+                    <= 1e-6 * spiky_grad_mag(0.0, 0.15)
+            );
         }
     }
 

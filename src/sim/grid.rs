@@ -1,70 +1,88 @@
-//! Uniform-grid neighbour search with spatial hashing (paper 000 Sec. V-B: "a space-based
-//! hash table is employed to accelerate neighbour search").
+//! Uniform-grid neighbour search. Paper 000 (Sec. V-B) accelerates it with a spatial hash;
+//! a dense grid over the swarm's bounding box does the same job with fewer instructions
+//! (no hashing, no bucket collisions to filter).
 //!
-//! Cells of edge `cell` are hashed into a power-of-two table; a counting sort places bee
-//! indices bucket by bucket in increasing index order, so neighbour iteration order — and
-//! with it every floating-point sum — is the same whatever the number of threads.
+//! Bee indices are counting-sorted by cell in increasing index order, so neighbour
+//! iteration order — and with it every floating-point sum — is the same whatever the
+//! number of threads. A query visits 9 rows of 3 adjacent cells, each one contiguous run
+//! of the sorted array.
 
 use glam::{IVec3, Vec3};
 
 #[derive(Clone, Debug, Default)]
 pub struct Grid {
+    origin: Vec3,
     inv_cell: f32,
-    mask: usize,
-    /// `starts[b]..starts[b + 1]` indexes `items` for bucket b.
+    dims: IVec3,
+    /// `starts[c]..starts[c + 1]` indexes `items` for cell c.
     starts: Vec<u32>,
     items: Vec<u32>,
-    buckets: Vec<u32>,
-}
-
-#[inline]
-fn hash(c: IVec3) -> usize {
-    (c.x.wrapping_mul(73_856_093) ^ c.y.wrapping_mul(19_349_663) ^ c.z.wrapping_mul(83_492_791))
-        as u32 as usize
+    cells: Vec<u32>,
 }
 
 impl Grid {
+    /// Cell coordinates of `p`, clamped into the grid (points outside the bounding box of
+    /// the last build land in the border cells, which keeps queries valid).
     #[inline]
     fn cell_of(&self, p: Vec3) -> IVec3 {
-        // Clamp so that far-away or huge coordinates cannot overflow the cast.
-        (p * self.inv_cell)
-            .floor()
-            .clamp(Vec3::splat(-1e9), Vec3::splat(1e9))
-            .as_ivec3()
+        let c = ((p - self.origin) * self.inv_cell).floor();
+        let max = (self.dims - IVec3::ONE).as_vec3();
+        c.clamp(Vec3::ZERO, max).as_ivec3()
     }
 
-    /// Rebuilds the grid over `positions` with cells of edge `cell` metres.
-    pub fn build(&mut self, positions: &[Vec3], cell: f32) {
+    #[inline]
+    fn index(&self, c: IVec3) -> usize {
+        (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize
+    }
+
+    /// Rebuilds the grid over `positions`; cells are at least `min_cell` metres (the
+    /// interaction radius) and grow when the swarm is spread so widely that the grid would
+    /// need more than about 8 cells per bee.
+    pub fn build(&mut self, positions: &[Vec3], min_cell: f32) {
         use rayon::prelude::*;
         let n = positions.len();
-        let size = (2 * n).next_power_of_two().max(1024);
-        self.inv_cell = 1.0 / cell;
-        self.mask = size - 1;
-        let (inv, mask) = (self.inv_cell, self.mask);
-        positions
+        let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let (lo, hi) = positions
             .par_iter()
-            .map(|p| {
-                (hash(
-                    (*p * inv)
-                        .floor()
-                        .clamp(Vec3::splat(-1e9), Vec3::splat(1e9))
-                        .as_ivec3(),
-                ) & mask) as u32
-            })
-            .collect_into_vec(&mut self.buckets);
+            .fold(|| empty, |(a, b), p| (a.min(*p), b.max(*p)))
+            .reduce(|| empty, |(a, b), (c, d)| (a.min(c), b.max(d)));
+        let (lo, hi) = if n == 0 {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (lo, hi)
+        };
+        let extent = (hi - lo).max(Vec3::splat(1e-6));
+        let budget = (8 * n).max(32_768) as f32;
+        let volume_cells =
+            (extent.x / min_cell + 1.0) * (extent.y / min_cell + 1.0) * (extent.z / min_cell + 1.0);
+        let cell = if volume_cells > budget {
+            min_cell * (volume_cells / budget).cbrt() * 1.01
+        } else {
+            min_cell
+        };
+        self.origin = lo;
+        self.inv_cell = 1.0 / cell;
+        self.dims = ((extent / cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
+        let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
+
+        let cells: Vec<u32> = positions
+            .par_iter()
+            .map(|p| self.index(self.cell_of(*p)) as u32)
+            .collect();
+        self.cells = cells;
         self.starts.clear();
-        self.starts.resize(size + 1, 0);
-        for &b in &self.buckets {
-            self.starts[b as usize + 1] += 1;
+        self.starts.resize(total + 1, 0);
+        for &c in &self.cells {
+            self.starts[c as usize + 1] += 1;
         }
-        for i in 0..size {
+        for i in 0..total {
             self.starts[i + 1] += self.starts[i];
         }
         self.items.resize(n, 0);
-        let mut fill = self.starts[..size].to_vec();
-        for (i, &b) in self.buckets.iter().enumerate() {
-            self.items[fill[b as usize] as usize] = i as u32;
-            fill[b as usize] += 1;
+        let mut fill = self.starts[..total].to_vec();
+        for (i, &c) in self.cells.iter().enumerate() {
+            self.items[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
         }
     }
 
@@ -73,21 +91,14 @@ impl Grid {
     #[inline]
     pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(usize)) {
         let c = self.cell_of(p);
-        let mut seen = [usize::MAX; 27];
-        let mut k = 0;
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let b = hash(c + IVec3::new(dx, dy, dz)) & self.mask;
-                    // Two cells may share a bucket: visit each bucket once.
-                    if seen[..k].contains(&b) {
-                        continue;
-                    }
-                    seen[k] = b;
-                    k += 1;
-                    for &j in &self.items[self.starts[b] as usize..self.starts[b + 1] as usize] {
-                        f(j as usize);
-                    }
+        let x0 = (c.x - 1).max(0);
+        let x1 = (c.x + 1).min(self.dims.x - 1);
+        for z in (c.z - 1).max(0)..=(c.z + 1).min(self.dims.z - 1) {
+            for y in (c.y - 1).max(0)..=(c.y + 1).min(self.dims.y - 1) {
+                let a = self.starts[self.index(IVec3::new(x0, y, z))] as usize;
+                let b = self.starts[self.index(IVec3::new(x1, y, z)) + 1] as usize;
+                for &j in &self.items[a..b] {
+                    f(j as usize);
                 }
             }
         }
@@ -99,22 +110,10 @@ mod tests {
     use super::*;
     use crate::math::Rng;
 
-    #[test]
-    fn finds_exactly_the_neighbours_brute_force_finds() {
-        let mut rng = Rng::new(1, 1, 1);
-        let pts: Vec<Vec3> = (0..2000)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                )
-            })
-            .collect();
+    fn check(pts: &[Vec3], r: f32) {
         let mut g = Grid::default();
-        let r = 0.1;
-        g.build(&pts, r);
-        for i in (0..pts.len()).step_by(37) {
+        g.build(pts, r);
+        for i in (0..pts.len()).step_by(7) {
             let mut found = Vec::new();
             g.for_each_near(pts[i], |j| {
                 if pts[j].distance(pts[i]) < r {
@@ -128,5 +127,39 @@ mod tests {
             brute.sort();
             assert_eq!(found, brute);
         }
+    }
+
+    #[test]
+    fn finds_exactly_the_neighbours_brute_force_finds() {
+        let mut rng = Rng::new(1, 1, 1);
+        let pts: Vec<Vec3> = (0..2000)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+            })
+            .collect();
+        check(&pts, 0.1);
+    }
+
+    #[test]
+    fn widely_spread_points_and_outliers_still_work() {
+        let mut rng = Rng::new(2, 1, 1);
+        let mut pts: Vec<Vec3> = (0..1000)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-0.5, 0.5),
+                    rng.range(-0.5, 0.5),
+                    rng.range(-0.5, 0.5),
+                )
+            })
+            .collect();
+        pts.push(Vec3::new(500.0, -300.0, 1e4));
+        pts.push(Vec3::new(500.0, -300.0, 1e4)); // coincident
+        check(&pts, 0.05);
+        check(&[Vec3::ONE], 0.1);
+        check(&[], 0.1);
     }
 }

@@ -8,6 +8,7 @@ use super::grid::Grid;
 use super::obstacle;
 use crate::field::CurlNoise;
 use crate::math::{self, Rng, normalize_or};
+use crate::model::kernels::Kernels;
 use crate::model::{boids, brownian, collision, oscillation, repulsion, targets, vision};
 use crate::shot::{ModelKind, Region, Shot, TargetKind};
 use glam::{Quat, Vec3};
@@ -52,6 +53,8 @@ struct SwarmRt {
     k2: f32,
     k3: f32,
     h: f32,
+    kernels: Kernels,
+    rest_density: f32,
     d0: f32,
     fov: f32,
     roll_max: f32,
@@ -87,6 +90,8 @@ pub struct Simulation {
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
+    /// Largest capsule radius of any bee, m: bounds every interaction distance.
+    max_body_radius: f32,
     frame: i32,
     step_index: u64,
     record: Vec<SwarmFrame>,
@@ -107,6 +112,8 @@ impl Simulation {
                     k2: p.kappa2 as f32,
                     k3: p.kappa3 as f32,
                     h: p.neighbour_radius as f32,
+                    kernels: Kernels::new(p.neighbour_radius as f32),
+                    rest_density: s.bee.mass * Kernels::new(p.neighbour_radius as f32).poly6(0.0),
                     d0: p.avoid_distance as f32,
                     fov: p.fov_deg as f32,
                     roll_max: p.roll_max_deg as f32,
@@ -153,14 +160,14 @@ impl Simulation {
                 }
             })
             .collect();
-        let max_size = shot
+        let max_body_radius = shot
             .swarms
             .iter()
-            .map(|s| 1.0 + s.variation.size)
-            .fold(1.0, f32::max);
+            .map(|s| s.bee.radius * (1.0 + s.variation.size))
+            .fold(0.0, f32::max);
         let grid_cell = swarms
             .iter()
-            .map(|s| s.h + 2.0 * s.radius * max_size)
+            .map(|s| s.h + 2.0 * max_body_radius)
             .fold(0.0, f32::max);
 
         let mut bees = Vec::with_capacity(shot.bee_count());
@@ -251,6 +258,7 @@ impl Simulation {
             positions: Vec::new(),
             grid: Grid::default(),
             grid_cell,
+            max_body_radius,
             step_index: 0,
             record: Vec::new(),
         };
@@ -359,11 +367,15 @@ impl Simulation {
         }
         let ri = s.radius * b.size;
         let mut rho = 0.0;
+        let reach = s.h + ri + self.max_body_radius;
         self.grid.for_each_near(b.pos, |j| {
             let o = &self.bees[j];
+            let d2 = b.pos.distance_squared(o.pos);
+            if d2 >= reach * reach {
+                return;
+            }
             let so = &self.swarms[o.swarm as usize];
-            let dist = b.pos.distance(o.pos);
-            rho += repulsion::density_term(so.mass, dist, ri + so.radius * o.size, s.h);
+            rho += repulsion::density_term(&s.kernels, so.mass, d2.sqrt(), ri + so.radius * o.size);
         });
         for &ti in &s.targets {
             let tr = &self.targets[ti];
@@ -371,11 +383,15 @@ impl Simulation {
                 continue;
             }
             for off in &tr.offsets {
-                rho += repulsion::density_term(s.mass, b.pos.distance(tr.center + *off), ri, s.h);
+                rho += repulsion::density_term(
+                    &s.kernels,
+                    s.mass,
+                    b.pos.distance(tr.center + *off),
+                    ri,
+                );
             }
         }
-        let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
-        (rho, repulsion::pressure(s.stiffness, rho, rest))
+        (rho, repulsion::pressure(s.stiffness, rho, s.rest_density))
     }
 
     /// A deterministic direction separating coincident bees i and j (opposite for j and i).
@@ -401,14 +417,16 @@ impl Simulation {
                 return;
             }
             let o = &self.bees[j];
-            let so = &self.swarms[o.swarm as usize];
             let r = b.pos - o.pos;
-            let dist = r.length();
-            let contact = ri + so.radius * o.size;
-            if dist >= s.h + contact {
+            let d2 = r.length_squared();
+            let reach = s.h + ri + self.max_body_radius;
+            if d2 >= reach * reach {
                 return;
             }
-            let fallback = Self::separation_fallback(i, j);
+            let so = &self.swarms[o.swarm as usize];
+            let dist = d2.sqrt();
+            let contact = ri + so.radius * o.size;
+            let fallback = || Self::separation_fallback(i, j);
             match s.model {
                 ModelKind::Bee => {
                     let rho_j = if o.density > 0.0 {
@@ -417,16 +435,8 @@ impl Simulation {
                         b.density
                     };
                     a_rep += repulsion::pressure_term(
-                        r,
-                        dist,
-                        contact,
-                        s.h,
-                        so.mass,
-                        b.pressure,
-                        o.pressure.max(0.0),
-                        b.density,
-                        rho_j,
-                        fallback,
+                        &s.kernels, r, dist, contact, so.mass, b.pressure, o.pressure, b.density,
+                        rho_j, fallback,
                     );
                 }
                 ModelKind::Boids => {
@@ -437,7 +447,7 @@ impl Simulation {
                         hood.separation += if dist > 1e-6 {
                             r / (dist * dist)
                         } else {
-                            fallback * 1e3
+                            fallback() * 1e3
                         };
                     }
                 }
@@ -458,14 +468,21 @@ impl Simulation {
                 target.reach,
             );
             if s.model == ModelKind::Bee && b.pos.distance(tr.center) <= tr.bounding + s.h + ri {
-                let rest = repulsion::density_term(s.mass, 0.0, 0.0, s.h);
-                for (k, off) in tr.offsets.iter().enumerate() {
+                for off in &tr.offsets {
                     let r = b.pos - (tr.center + *off);
                     let dist = r.length();
-                    let fallback = normalize_or(*off, Vec3::Y);
-                    let _ = k;
+                    // A static particle mirrors the bee's pressure at rest density.
                     a_rep += repulsion::pressure_term(
-                        r, dist, ri, s.h, s.mass, b.pressure, b.pressure, b.density, rest, fallback,
+                        &s.kernels,
+                        r,
+                        dist,
+                        ri,
+                        s.mass,
+                        b.pressure,
+                        b.pressure,
+                        b.density,
+                        s.rest_density,
+                        || normalize_or(*off, Vec3::Y),
                     );
                 }
             }
