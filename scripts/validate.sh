@@ -15,7 +15,8 @@ REAL=${REAL:-$ROOT/../shared/data/mosquito_flights.csv}
 GENERATIONS=${GENERATIONS:-200}
 BASELINE_GENERATIONS=${BASELINE_GENERATIONS:-30}
 GA_SEED=${GA_SEED:-1}
-EVAL_SEED=${EVAL_SEED:-2026}   # the shot's own seed (11) is the calibration's
+SEEDS=${SEEDS:-2}              # simulation runs pooled per individual
+EVAL_SEED=${EVAL_SEED:-2026}   # calibration uses the shot's seeds 11, 12
 OUT=out/validation
 
 if [ ! -f "$REAL" ]; then
@@ -41,13 +42,13 @@ variant() { # model preset > shot
 variant bee nest > "$OUT/calibrate_bee.toml"
 "$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_bee.toml" \
     --out presets/mosquito_cage.toml --name mosquito_cage \
-    --generations "$GENERATIONS" --population 10 --seed "$GA_SEED" \
+    --generations "$GENERATIONS" --population 10 --seed "$GA_SEED" --seeds "$SEEDS" \
     --figure docs/img/mosquito_cage_fitness.png --progress bar
 for m in brownian boids; do
     variant "$m" nest > "$OUT/calibrate_$m.toml"
     "$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_$m.toml" \
         --out "$OUT/mosquito_cage_$m.preset.toml" --name "mosquito_cage_$m" --only speed \
-        --generations "$BASELINE_GENERATIONS" --population 10 --seed "$GA_SEED" --progress none
+        --generations "$BASELINE_GENERATIONS" --population 10 --seed "$GA_SEED" --seeds "$SEEDS" --progress none
 done
 
 # 2. Bake on a held-out seed: the checked-in example for the bee model, variants for the

@@ -62,7 +62,7 @@ fn a_short_calibration_improves_fitness() {
     let r = ga::run(
         PARAMS.len(),
         &cfg,
-        |g| calibrate::fitness(&shot, &PARAMS, &reference, &s, g),
+        |g| calibrate::fitness(&shot, &PARAMS, &reference, &s, 1, g),
         |_| {},
     );
     let first = r.history.first().unwrap().best;
@@ -81,7 +81,7 @@ fn a_short_calibration_improves_fitness() {
             .all(|g| g.best.is_finite() && g.mean.is_finite())
     );
     // The parameters that made the reference fit it better than the search's start.
-    let exact = calibrate::fitness(&shot, &PARAMS, &reference, &s, &target);
+    let exact = calibrate::fitness(&shot, &PARAMS, &reference, &s, 1, &target);
     assert!(exact > 0.99, "{exact}");
     assert!(exact >= first);
 }
@@ -120,6 +120,7 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
         bins: 20,
         name: None,
         only: vec![],
+        seeds: 1,
     };
     run_calibrate(&args).unwrap();
     let text = std::fs::read_to_string(&out).unwrap();

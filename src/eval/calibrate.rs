@@ -3,12 +3,12 @@
 //!
 //! Genes are Γ = {κ1, κ2, κ3, L, ε, h} plus the preferred speed, each in [0, 1] and mapped
 //! to a documented physical range (`PARAMS`; log-scaled where the range spans decades).
-//! An individual is scored by cloning the base shot, giving every bee-model swarm its
-//! parameters, running the whole shot in memory, and comparing the flights with the
-//! recording: fitness = mean q over the single-insect metrics (`report::Reference::fitness`).
-//! Every individual runs with the shot's own seed (common random numbers), so two
-//! parameter sets are compared on the same noise field and spawn, and differences in
-//! fitness come from the parameters rather than from luck of the draw.
+//! An individual is scored by cloning the base shot, giving every swarm its parameters,
+//! running the whole shot in memory (once per simulation seed, flights pooled), and
+//! comparing the flights with the recording: fitness = mean q over the single-insect
+//! metrics (`report::Reference::fitness`). Every individual runs with the same seeds
+//! (common random numbers), so two parameter sets are compared on the same noise field
+//! and spawn, and differences in fitness come from the parameters rather than from luck.
 
 use super::ga::{self, GaConfig, GaResult};
 use super::histogram::TAIL;
@@ -89,7 +89,7 @@ pub const PARAMS: [ParamRange; 7] = [
     },
     ParamRange {
         key: "speed",
-        lo: 0.05,
+        lo: 0.01,
         hi: 1.5,
         log: true,
     },
@@ -182,15 +182,23 @@ pub fn shot_with(base: &Shot, space: &[ParamRange], genes: &[f64]) -> Shot {
     shot
 }
 
-/// Fitness of one parameter set against the reference.
+/// Fitness of one parameter set against the reference: the flights of `seeds` runs of
+/// the shot (seeds `shot.seed`, `shot.seed + 1`, ...) pooled into one sample.
 pub fn fitness(
     base: &Shot,
     space: &[ParamRange],
     reference: &Reference,
     settings: &Settings,
+    seeds: u64,
     genes: &[f64],
 ) -> f64 {
-    let ds = simulate(&shot_with(base, space, genes));
+    let shot = shot_with(base, space, genes);
+    let mut ds = simulate(&shot);
+    for k in 1..seeds {
+        let mut other = shot.clone();
+        other.seed = shot.seed.wrapping_add(k);
+        ds.tracks.extend(simulate(&other).tracks);
+    }
     // Only single-insect metrics enter the fitness: skip the O(n²) neighbour pass.
     let uni = resample(&ds, settings.dt);
     let samples = super::metrics::compute(&uni, &settings.metric_options(false));
@@ -210,7 +218,7 @@ pub struct CalibrateArgs {
     /// The recording to fit (splined tracks or a beeswarm tracks CSV).
     #[arg(long, value_name = "REAL")]
     pub reference: PathBuf,
-    /// The shot to simulate; its bee-model swarms get the parameters.
+    /// The shot to simulate; every swarm gets the parameters.
     #[arg(long, value_name = "BASE.toml")]
     pub shot: PathBuf,
     /// Where to write the preset.
@@ -240,6 +248,11 @@ pub struct CalibrateArgs {
     /// Preset name [default: the file stem of --out].
     #[arg(long)]
     pub name: Option<String>,
+    /// Runs of the shot per individual, with seeds shot.seed, shot.seed + 1, ...: their
+    /// flights are pooled, so a parameter set is judged on more than one draw of spawn
+    /// and noise and the fit does not chase the luck of a single seed.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seeds: u64,
     /// Calibrate only these parameters (comma-separated), keeping the shot's values for
     /// the rest; e.g. `--only speed` for the Brownian and boids baselines.
     #[arg(long, value_delimiter = ',', value_name = "PARAM,...")]
@@ -275,6 +288,9 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
     }
     if args.bins == 0 {
         return Err(Error::input("--bins must be at least 1"));
+    }
+    if args.seeds == 0 {
+        return Err(Error::input("--seeds must be at least 1"));
     }
     let shot = crate::shot::load(&args.shot)?;
     if shot.swarms.is_empty() {
@@ -325,7 +341,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         ga::run(
             space.len(),
             &cfg,
-            |g| fitness(&shot, &space, &reference, &settings, g),
+            |g| fitness(&shot, &space, &reference, &settings, args.seeds, g),
             |g| {
                 let el = start.elapsed().as_secs_f64();
                 match mode {
@@ -363,6 +379,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
     let base = base_preset(&shot.swarms[0].preset, &args.shot);
     let provenance = format!(
         "{}\n{} generations x {} individuals (crossover {}, mutation {}, elitism {}), GA seed {}, \
+         {} simulation seed(s) from {}, \
          {} evaluations in {:.0} s; best fitness q = {:.4} (mean over speed, acceleration, \
          angular velocity, angular acceleration and jerk of 1 - dE/2, {} shared bins, dt {} s) \
          against {} ({} tracks); beeswarm {}",
@@ -373,6 +390,8 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         cfg.mutation,
         cfg.elitism,
         cfg.seed,
+        args.seeds,
+        shot.seed,
         result.evaluations,
         seconds,
         result.best_fitness,
