@@ -50,7 +50,7 @@ fn synthetic_reference(shot: &Shot, genes: &[f64]) -> Reference {
 #[test]
 fn a_short_calibration_improves_fitness() {
     let shot = small_shot();
-    let target = [0.4, 0.3, 0.5, 0.6, 0.5, 0.5, 0.35];
+    let target = [0.4, 0.3, 0.5, 0.6, 0.5, 0.5, 0.35, 0.5];
     let reference = synthetic_reference(&shot, &target);
     let cfg = GaConfig {
         population: 6,
