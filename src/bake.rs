@@ -3,7 +3,7 @@
 use crate::error::{Error, Result};
 use crate::export::{self, CacheWriter, Format};
 use crate::shot::Shot;
-use crate::sim::{Frame, Simulation};
+use crate::sim::{Frame, Simulation, SwarmFrame};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -59,58 +59,112 @@ pub fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> Re
     Ok(pool.install(f))
 }
 
+/// What the simulation thread sends the writer thread.
+enum Message {
+    Frame {
+        frame: i32,
+        time: f64,
+        swarms: Vec<SwarmFrame>,
+    },
+    /// Every frame was sent: the writers may complete their files.
+    Done,
+}
+
 /// Bakes `shot` into the requested caches; returns the written paths.
+///
+/// The simulation and the writers run concurrently: frames go to a writer thread through a
+/// channel that holds at most two frames, so memory stays bounded while formatting one
+/// frame overlaps simulating the next. Writers complete (rename into place) only after the
+/// last frame; an error or an interrupt drops them, which removes their temporary files.
 pub fn bake(
     shot: &Shot,
     opts: &BakeOptions,
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
-    with_threads(opts.threads, || {
-        let start = Instant::now();
-        let mut sim = Simulation::new(shot);
-        let meta = sim.meta();
-        let mut writers: Vec<Box<dyn CacheWriter>> = Vec::new();
-        for &f in opts.formats {
-            writers.push(export::open_writer(
-                f,
-                &meta,
-                opts.out_dir,
-                &shot.output.options,
-            )?);
-        }
-        if opts.preview {
-            writers.push(export::open_preview(shot, &meta, opts.out_dir)?);
-        }
-        let total = shot.frame_count();
-        for done in 1..=total {
-            if done > 1 {
-                sim.advance();
+    let start = Instant::now();
+    let mut sim = with_threads(opts.threads, || Simulation::new(shot))?;
+    let meta = sim.meta();
+    let mut writers: Vec<Box<dyn CacheWriter>> = Vec::new();
+    for &f in opts.formats {
+        writers.push(export::open_writer(
+            f,
+            &meta,
+            opts.out_dir,
+            &shot.output.options,
+        )?);
+    }
+    if opts.preview {
+        writers.push(export::open_preview(shot, &meta, opts.out_dir)?);
+    }
+    let total = shot.frame_count();
+    std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Message>(2);
+        let writer = scope.spawn(move || -> Result<Vec<PathBuf>> {
+            for msg in rx {
+                match msg {
+                    Message::Frame {
+                        frame,
+                        time,
+                        swarms,
+                    } => {
+                        let f = Frame {
+                            frame,
+                            time,
+                            swarms: &swarms,
+                        };
+                        for w in writers.iter_mut() {
+                            w.write_frame(&f)?;
+                        }
+                    }
+                    Message::Done => {
+                        // Seal every file of every format, then rename them all.
+                        let mut sealed = Vec::new();
+                        for w in writers {
+                            sealed.extend(w.finish()?);
+                        }
+                        return export::atomic::commit_all(sealed);
+                    }
+                }
             }
-            if INTERRUPTED.load(Ordering::Relaxed) {
-                return Err(Error::bake(
-                    "interrupted: no cache was written; the previous cache is untouched",
-                ));
+            Err(Error::bake(
+                "interrupted: no cache was written; the previous cache is untouched",
+            ))
+        });
+        let simulated = with_threads(opts.threads, || -> Result<()> {
+            for done in 1..=total {
+                if done > 1 {
+                    sim.advance();
+                }
+                if INTERRUPTED.load(Ordering::Relaxed) {
+                    return Err(Error::bake(
+                        "interrupted: no cache was written; the previous cache is untouched",
+                    ));
+                }
+                let msg = Message::Frame {
+                    frame: sim.frame(),
+                    time: sim.time(),
+                    swarms: sim.record().to_vec(),
+                };
+                if tx.send(msg).is_err() {
+                    // The writer stopped on an error; it reports it below.
+                    return Ok(());
+                }
+                progress(Progress {
+                    done,
+                    total,
+                    frame: sim.frame(),
+                    elapsed_s: start.elapsed().as_secs_f64(),
+                });
             }
-            let frame = Frame {
-                frame: sim.frame(),
-                time: sim.time(),
-                swarms: sim.record(),
-            };
-            for w in writers.iter_mut() {
-                w.write_frame(&frame)?;
-            }
-            progress(Progress {
-                done,
-                total,
-                frame: sim.frame(),
-                elapsed_s: start.elapsed().as_secs_f64(),
-            });
-        }
-        let mut outputs = Vec::new();
-        for w in writers {
-            outputs.extend(w.finish()?);
-        }
-        Ok(outputs)
-    })?
+            let _ = tx.send(Message::Done);
+            Ok(())
+        })?;
+        drop(tx);
+        let written = writer
+            .join()
+            .unwrap_or_else(|_| Err(Error::bake("a cache writer failed unexpectedly")));
+        simulated?;
+        written
+    })
 }

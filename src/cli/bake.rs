@@ -2,10 +2,10 @@
 
 use super::progress::{Mode, Reporter};
 use crate::bake::{BakeOptions, INTERRUPTED, bake};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::export::Format;
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 
 #[derive(Args, Debug)]
@@ -20,13 +20,13 @@ pub struct BakeArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Comma-separated formats: glb, gltf, usda, csv (default: the shot's, else glb,usda).
-    #[arg(long, value_parser = super::parse_formats)]
-    pub format: Option<Vec<Format>>,
+    #[arg(long, value_delimiter = ',', value_parser = super::parse_format)]
+    pub format: Vec<Format>,
     /// Override the shot's seed.
     #[arg(long)]
     pub seed: Option<u64>,
     /// Override the frame range, START:END inclusive.
-    #[arg(long, value_parser = super::parse_frames)]
+    #[arg(long, value_parser = super::parse_frames, allow_hyphen_values = true)]
     pub frames: Option<(i32, i32)>,
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, default_value_t = 0)]
@@ -55,10 +55,19 @@ pub fn run(a: BakeArgs) -> Result<()> {
         shot.frame_end = e;
     }
     let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
-    let formats = a
-        .format
-        .clone()
-        .unwrap_or_else(|| shot.output.formats.clone());
+    check_out_dir(&out_dir, a.out.is_some())?;
+    let formats = if a.format.is_empty() {
+        shot.output.formats.clone()
+    } else {
+        // `--format csv,CSV` names one writer, not two writing the same file.
+        let mut unique: Vec<Format> = Vec::new();
+        for f in &a.format {
+            if !unique.contains(f) {
+                unique.push(*f);
+            }
+        }
+        unique
+    };
     let opts = BakeOptions {
         out_dir: &out_dir,
         formats: &formats,
@@ -92,5 +101,32 @@ pub fn run(a: BakeArgs) -> Result<()> {
             reporter.abandon();
             Err(e)
         }
+    }
+}
+
+/// Refuses an output folder that is, or lies under, a regular file, naming the file (the
+/// system's "File exists" / "Not a directory" do not say which one is in the way).
+fn check_out_dir(dir: &Path, from_option: bool) -> Result<()> {
+    let source = if from_option {
+        "--out"
+    } else {
+        "the shot's [output] dir"
+    };
+    let blocker = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .find(|p| p.exists())
+        .filter(|p| !p.is_dir());
+    match blocker {
+        Some(file) if file == dir => Err(Error::input(format!(
+            "the output folder {} ({source}) is a file, not a folder",
+            dir.display()
+        ))),
+        Some(file) => Err(Error::input(format!(
+            "cannot create the output folder {} ({source}): {} is a file, not a folder",
+            dir.display(),
+            file.display()
+        ))),
+        None => Ok(()),
     }
 }

@@ -52,7 +52,17 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if a.bees == 0 || a.frames == 0 {
         return Err(Error::input("--bees and --frames must be at least 1"));
     }
-    let shot = bench_shot(a.bees, a.frames, a.substeps, &a.preset)?;
+    let shot = bench_shot(a.bees, a.frames, a.substeps, &a.preset).map_err(|e| {
+        // The shot is generated from the options: name the option, not the hidden text.
+        let option = match e.key.as_str() {
+            "scene.substeps" => "--substeps",
+            "scene.frames" => "--frames",
+            k if k.ends_with(".preset") => "--preset",
+            _ => "--bees",
+        };
+        let hint = e.hint.map(|h| format!("\n  hint: {h}")).unwrap_or_default();
+        Error::input(format!("{option}: {}{hint}", e.message))
+    })?;
     let threads = if a.threads == 0 {
         rayon::current_num_threads()
     } else {

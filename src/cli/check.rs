@@ -52,13 +52,13 @@ pub fn summary(shot: &Shot) -> String {
             w.count,
             w.model.name(),
             w.preset,
-            p.kappa1,
-            p.kappa2,
-            p.kappa3,
-            p.noise_cell,
-            p.noise_gain,
-            p.neighbour_radius,
-            p.speed
+            num(p.kappa1),
+            num(p.kappa2),
+            num(p.kappa3),
+            num(p.noise_cell),
+            num(p.noise_gain),
+            num(p.neighbour_radius),
+            num(p.speed)
         );
     }
     let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
@@ -94,4 +94,11 @@ pub fn summary(shot: &Shot) -> String {
         let _ = writeln!(s, "    {}.preview.png", shot.name);
     }
     s
+}
+
+/// A parameter for people: six significant digits, so 2.2 × 0.05 prints as 0.11 rather
+/// than 0.11000000000000001.
+fn num(x: f64) -> String {
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    rounded.to_string()
 }

@@ -73,22 +73,21 @@ pub fn parse_frames(s: &str) -> Result<(i32, i32), String> {
             "the frame range {a}:{b} is reversed; write {b}:{a}"
         ));
     }
+    // The same limits as `frames` in a shot (and no i32 overflow in the frame count).
+    if a < -1_000_000 || b > 1_000_000 || b as i64 - a as i64 > 100_000 {
+        return Err(format!(
+            "expected at most 100000 frames within ±1000000, found {a}:{b}"
+        ));
+    }
     Ok((a, b))
 }
 
-/// Parses a comma-separated list of formats.
-pub fn parse_formats(s: &str) -> Result<Vec<crate::export::Format>, String> {
-    let mut out = Vec::new();
-    for part in s.split(',') {
-        let f = crate::export::Format::parse(part).ok_or_else(|| {
-            format!(
-                "unknown format \"{}\": expected glb, gltf, usda or csv",
-                part.trim()
-            )
-        })?;
-        if !out.contains(&f) {
-            out.push(f);
-        }
-    }
-    Ok(out)
+/// Parses one format name; clap splits `--format glb,csv` at the commas.
+pub fn parse_format(s: &str) -> Result<crate::export::Format, String> {
+    crate::export::Format::parse(s).ok_or_else(|| {
+        format!(
+            "unknown format \"{}\": expected glb, gltf, usda or csv",
+            s.trim()
+        )
+    })
 }

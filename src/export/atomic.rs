@@ -43,16 +43,75 @@ impl AtomicFile {
         self.writer.as_mut().expect("writer present until commit")
     }
 
-    /// Flushes, syncs and renames onto the destination.
-    pub fn commit(mut self) -> Result<PathBuf> {
-        let w = self.writer.take().expect("writer present until commit");
-        let file = w
+    /// Flushes and syncs the file under its temporary name: the first phase of a commit.
+    /// On failure the temporary file is removed (Drop no longer sees a writer).
+    pub fn seal(mut self) -> Result<SealedFile> {
+        let w = self.writer.take().expect("writer present until sealed");
+        let result = w
             .into_inner()
-            .map_err(|e| Error::io(&self.tmp, e.into_error()))?;
-        file.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
-        drop(file);
-        std::fs::rename(&self.tmp, &self.dest).map_err(|e| Error::io(&self.dest, e))?;
+            .map_err(|e| Error::io(&self.tmp, e.into_error()))
+            .and_then(|file| file.sync_all().map_err(|e| Error::io(&self.tmp, e)));
+        let tmp = std::mem::take(&mut self.tmp);
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+        Ok(SealedFile {
+            tmp,
+            dest: std::mem::take(&mut self.dest),
+            committed: false,
+        })
+    }
+
+    /// Seals and renames onto the destination at once.
+    pub fn commit(self) -> Result<PathBuf> {
+        self.seal()?.commit()
+    }
+}
+
+/// A complete file on disk under its temporary name, waiting to be renamed into place.
+/// A bake seals every file of every format first and renames them only when all sealed,
+/// so a failure leaves every previous cache untouched. Dropped uncommitted, it is removed.
+#[must_use = "a sealed file is removed unless committed"]
+pub struct SealedFile {
+    tmp: PathBuf,
+    dest: PathBuf,
+    committed: bool,
+}
+
+impl SealedFile {
+    pub fn dest(&self) -> &Path {
+        &self.dest
+    }
+
+    /// Renames the file into place. On failure the temporary file is removed.
+    pub fn commit(mut self) -> Result<PathBuf> {
+        self.committed = true;
+        if let Err(e) = std::fs::rename(&self.tmp, &self.dest) {
+            let _ = std::fs::remove_file(&self.tmp);
+            return Err(Error::io(&self.dest, e));
+        }
         Ok(std::mem::take(&mut self.dest))
+    }
+}
+
+/// Renames sealed files into place in order; returns their final paths. A destination
+/// that cannot be replaced (a folder stands there) is found before anything is renamed.
+pub fn commit_all(files: Vec<SealedFile>) -> Result<Vec<PathBuf>> {
+    if let Some(f) = files.iter().find(|f| f.dest.is_dir()) {
+        return Err(Error::bake(format!(
+            "cannot write {}: a folder stands there",
+            f.dest.display()
+        )));
+    }
+    files.into_iter().map(SealedFile::commit).collect()
+}
+
+impl Drop for SealedFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
     }
 }
 
@@ -109,6 +168,37 @@ mod tests {
             let mut f = AtomicFile::create(&dest).unwrap();
             f.write_all(b"new partial").unwrap();
         } // dropped without commit: an interrupted bake
+        assert_eq!(std::fs::read_to_string(&dest).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn failed_commit_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        // A folder where the file should go: the rename fails.
+        let dest = dir.path().join("a.txt");
+        std::fs::create_dir(&dest).unwrap();
+        let mut f = AtomicFile::create(&dest).unwrap();
+        f.write_all(b"new").unwrap();
+        assert!(f.commit().is_err());
+        assert!(dest.is_dir());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_sealed_file_dropped_before_commit_leaves_the_previous_content() {
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("a.txt");
+        std::fs::write(&dest, "old").unwrap();
+        let mut f = AtomicFile::create(&dest).unwrap();
+        f.write_all(b"new").unwrap();
+        let sealed = f.seal().unwrap();
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            2,
+            "sealed under its temporary name"
+        );
+        drop(sealed);
         assert_eq!(std::fs::read_to_string(&dest).unwrap(), "old");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }

@@ -5,11 +5,11 @@
 //! roll in degrees; sway in metres. Floats use the shortest text that reads back exactly.
 
 use super::CacheWriter;
-use super::atomic::AtomicFile;
+use super::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub const HEADER: &str = "id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw,pitch,roll,sway";
 
@@ -83,7 +83,7 @@ impl CacheWriter for CsvWriter {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>> {
-        Ok(vec![self.file.commit()?])
+    fn finish(self: Box<Self>) -> Result<Vec<SealedFile>> {
+        Ok(vec![self.file.seal()?])
     }
 }

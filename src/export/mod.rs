@@ -6,11 +6,13 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod gltf;
 pub mod preview;
+pub mod usda;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A cache format the bake can write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -70,8 +72,10 @@ impl Default for OutputOptions {
 pub trait CacheWriter: Send {
     /// Called once per frame, in frame order, for every frame of the range.
     fn write_frame(&mut self, frame: &Frame) -> Result<()>;
-    /// Completes the files, renames them into place and returns their paths.
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>>;
+    /// Completes the files and returns them sealed under temporary names, in the order
+    /// they must be renamed into place (the bake renames them only once every writer has
+    /// sealed, so a failure in any format leaves every previous cache untouched).
+    fn finish(self: Box<Self>) -> Result<Vec<atomic::SealedFile>>;
 }
 
 /// Opens the preview writer (`<name>.preview.png`, a plot of the trajectories).
@@ -90,13 +94,25 @@ pub fn open_writer(
     dir: &Path,
     opts: &OutputOptions,
 ) -> Result<Box<dyn CacheWriter>> {
-    let _ = opts;
     let path = dir.join(format.file_name(&meta.shot_name));
     match format {
         Format::Csv => Ok(Box::new(csv::CsvWriter::create(&path, meta)?)),
-        other => Err(Error::bake(format!(
-            "the {} writer is not available in this build",
-            other.name()
-        ))),
+        Format::Glb => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Glb,
+            &path,
+            meta,
+            opts,
+        )?)),
+        Format::Gltf => Ok(Box::new(gltf::GltfWriter::create(
+            gltf::Container::Gltf,
+            &path,
+            meta,
+            opts,
+        )?)),
+        Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
+            &path,
+            meta,
+            opts.usda_clip_frames,
+        )?)),
     }
 }

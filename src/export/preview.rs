@@ -8,11 +8,13 @@
 //! stride of frames beyond).
 
 use super::CacheWriter;
-use crate::error::Result;
+use super::atomic::{AtomicFile, SealedFile};
+use crate::error::{Error, Result};
 use crate::plot::{Canvas, Chart, Legend, LegendMark, Rgb, palette};
 use crate::shot::{Obstacle, Shape, Shot, Target};
 use crate::sim::{CacheMeta, Frame};
 use glam::Vec3;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub const MAX_BEES: usize = 300;
@@ -295,8 +297,12 @@ impl CacheWriter for PreviewWriter {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>> {
-        Ok(vec![self.render().save_png(&self.path)?])
+    fn finish(self: Box<Self>) -> Result<Vec<SealedFile>> {
+        // Sealed, not committed: the bake renames it with every other cache file.
+        let bytes = self.render().encode_png()?;
+        let mut f = AtomicFile::create(&self.path)?;
+        f.write_all(&bytes).map_err(|e| Error::io(&self.path, e))?;
+        Ok(vec![f.seal()?])
     }
 }
 
@@ -347,7 +353,7 @@ keys = [{ frame = 1, position = [0.0, 1.2, 0.0] }, { frame = 30, position = [0.4
             };
             w.write_frame(&frame).unwrap();
         }
-        let out = w.finish().unwrap();
+        let out = crate::export::atomic::commit_all(w.finish().unwrap()).unwrap();
         assert_eq!(out.len(), 1);
         out[0].clone()
     }

@@ -7,7 +7,7 @@
 //! ([`crate::model::params::SCENE_UNIT_M`]); the result is an acceleration in m/s²
 //! (one scene force unit per unit mass = 1 m/s², see docs/model.md).
 
-use super::noise::Perlin;
+use super::noise::{LatticePoint, Perlin};
 use crate::model::params::SCENE_UNIT_M;
 use glam::Vec3;
 
@@ -18,8 +18,6 @@ pub struct CurlNoise {
     inv_cell: f32,
     /// ε / L² with L in scene units.
     gain: f32,
-    /// Offsets decorrelating the three potentials.
-    offsets: [Vec3; 3],
 }
 
 impl CurlNoise {
@@ -34,20 +32,18 @@ impl CurlNoise {
             ],
             inv_cell: (1.0 / cell) as f32,
             gain: (epsilon / (l_scene * l_scene)) as f32,
-            offsets: [
-                Vec3::ZERO,
-                Vec3::new(31.416, -47.853, 12.679),
-                Vec3::new(-19.913, 23.071, -71.337),
-            ],
         }
     }
 
     /// F_curl at `p` (metres), as an acceleration in m/s².
     pub fn force(&self, p: Vec3) -> Vec3 {
         let xi = p * self.inv_cell;
-        let g1 = self.potentials[0].sample(xi + self.offsets[0]).1;
-        let g2 = self.potentials[1].sample(xi + self.offsets[1]).1;
-        let g3 = self.potentials[2].sample(xi + self.offsets[2]).1;
+        // The three potentials differ by their permutation tables alone, so they share
+        // the lattice point.
+        let lp = LatticePoint::new(xi);
+        let g1 = self.potentials[0].sample_at(&lp).1;
+        let g2 = self.potentials[1].sample_at(&lp).1;
+        let g3 = self.potentials[2].sample_at(&lp).1;
         // Eq. 9: (∂ψz/∂y − ∂ψy/∂z, ∂ψx/∂z − ∂ψz/∂x, ∂ψy/∂x − ∂ψx/∂y).
         Vec3::new(g3.y - g2.z, g1.z - g3.x, g2.x - g1.y) * self.gain
     }

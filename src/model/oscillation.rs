@@ -16,16 +16,24 @@ pub fn lift_coefficient(alpha_deg: f32) -> f32 {
     -0.00095953 * alpha_deg * alpha_deg + 0.090635 * alpha_deg - 0.34182
 }
 
+/// sin(π (t + shift) / half_period), with the phase reduced in f64 so that long shots
+/// keep full precision, then evaluated in f32.
+#[inline]
+fn periodic(t: f64, shift: f64, half_period: f64) -> f32 {
+    let phase = ((t + shift) / (2.0 * half_period)).rem_euclid(1.0);
+    (phase as f32 * std::f32::consts::TAU).sin()
+}
+
 /// Eq. 3: pitch angle (degrees) at maneuvering time t (in the equation's time units).
 #[inline]
 pub fn pitch_deg(t: f64) -> f32 {
-    (16.429 + 3.5 * (std::f64::consts::PI * (t + 2.986) / 35.972).sin()) as f32
+    16.429 + 3.5 * periodic(t, 2.986, 35.972)
 }
 
 /// Eq. 4: roll angle (degrees) at maneuvering time t.
 #[inline]
 pub fn roll_deg(t: f64) -> f32 {
-    (-0.765 + 18.914 * (std::f64::consts::PI * (t + 38.298) / 91.775).sin()) as f32
+    -0.765 + 18.914 * periodic(t, 38.298, 91.775)
 }
 
 /// Period of Eq. 3 in its own time units (2 × 35.972).
@@ -86,6 +94,16 @@ mod tests {
         // The paper: pitch and roll stay small (≤ 20°).
         assert!((pmin - 12.929).abs() < 0.01 && (pmax - 19.929).abs() < 0.01);
         assert!((rmin + 19.679).abs() < 0.01 && (rmax - 18.149).abs() < 0.01);
+    }
+
+    #[test]
+    fn maneuvering_functions_equal_eq3_and_eq4_even_after_long_times() {
+        for t in [0.0, 1.0, 17.3, 1e4, 3.6e6] {
+            let p = 16.429 + 3.5 * (std::f64::consts::PI * (t + 2.986) / 35.972).sin();
+            let r = -0.765 + 18.914 * (std::f64::consts::PI * (t + 38.298) / 91.775).sin();
+            assert!((pitch_deg(t) as f64 - p).abs() < 1e-3, "t={t}");
+            assert!((roll_deg(t) as f64 - r).abs() < 5e-3, "t={t}");
+        }
     }
 
     #[test]

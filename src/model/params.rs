@@ -81,7 +81,7 @@ impl BeeParams {
             avoid_distance: 0.12,
             fov_deg: 45.0,
             roll_max_deg: 45.0,
-            oscillation_time_unit: 0.01,
+            oscillation_time_unit: 0.005,
             pressure_stiffness: 1.0,
             collision_stiffness: 4000.0,
             attraction: 1.0,

@@ -32,6 +32,9 @@ pub const ATTRACTOR: (f64, f64) = (0.05, 2.0);
 
 pub const OUTPUT_DIR: &str = "out";
 pub const OUTPUT_FORMATS: [&str; 2] = ["glb", "usda"];
-/// Visible wing flap rate in glTF, Hz (the real 230 Hz would alias at any frame rate).
+/// Visible wing flap rate in glTF, Hz, from 0 to fps/2 (the real ~230 Hz would alias at any
+/// frame rate). 0, the default, holds the wings still at mid-stroke with a more transparent
+/// membrane: what a camera sees of a real beat. A few Hz gives a stylised, readable flap
+/// (see docs/caches.md, glTF).
 pub const WING_FLAP_HZ: f64 = 0.0;
 pub const USDA_CLIP_FRAMES: i64 = 0;

@@ -5,13 +5,17 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use toml_edit::{ImDocument, Item, Value};
 
+/// Byte spans of a key and of its value.
+type Spans = (Option<Range<usize>>, Option<Range<usize>>);
+
 /// The spans of every key and value in a parsed TOML document.
 pub struct Locator<'a> {
     src: &'a str,
     /// path → (key span, value span)
-    spans: BTreeMap<String, (Option<Range<usize>>, Option<Range<usize>>)>,
-    /// Non-finite floats found anywhere (TOML allows `nan` and `inf`).
-    pub non_finite: Vec<String>,
+    spans: BTreeMap<String, Spans>,
+    /// Non-finite floats found anywhere (TOML allows `nan` and `inf`): path and the value
+    /// as written (`nan`, `inf` or `-inf`).
+    pub non_finite: Vec<(String, &'static str)>,
 }
 
 impl<'a> Locator<'a> {
@@ -66,7 +70,17 @@ impl<'a> Locator<'a> {
     fn walk_value(&mut self, v: &Value, path: &str, key_span: Option<Range<usize>>) {
         self.spans.insert(path.to_owned(), (key_span, v.span()));
         match v {
-            Value::Float(f) if !f.value().is_finite() => self.non_finite.push(path.to_owned()),
+            Value::Float(f) if !f.value().is_finite() => {
+                let v = *f.value();
+                let text = if v.is_nan() {
+                    "nan"
+                } else if v > 0.0 {
+                    "inf"
+                } else {
+                    "-inf"
+                };
+                self.non_finite.push((path.to_owned(), text));
+            }
             Value::Array(a) => {
                 for (i, x) in a.iter().enumerate() {
                     self.walk_value(x, &format!("{path}[{i}]"), x.span());
@@ -116,10 +130,18 @@ impl<'a> Locator<'a> {
         let end = self.src[start..]
             .find('\n')
             .map_or(self.src.len(), |i| start + i);
-        (
-            line,
-            col,
-            self.src[start..end].trim_end_matches('\r').to_owned(),
-        )
+        // Control characters (binary garbage) would garble the terminal: show them as �.
+        let text = self.src[start..end]
+            .trim_end_matches('\r')
+            .chars()
+            .map(|c| {
+                if c.is_control() && c != '\t' {
+                    '\u{fffd}'
+                } else {
+                    c
+                }
+            })
+            .collect();
+        (line, col, text)
     }
 }

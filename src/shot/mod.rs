@@ -230,20 +230,43 @@ pub struct Output {
 
 /// Reads and resolves a shot file.
 pub fn load(path: &Path) -> Result<Shot, ShotError> {
-    let src = std::fs::read_to_string(path).map_err(|e| ShotError {
+    let error = |line, column, message: String, hint: Option<&str>| ShotError {
         file: path.to_path_buf(),
-        line: 0,
-        column: 0,
+        line,
+        column,
         key: String::new(),
-        message: match e.kind() {
-            std::io::ErrorKind::NotFound => "no such shot file".to_owned(),
-            std::io::ErrorKind::InvalidData => {
-                "not a text file (expected TOML in UTF-8)".to_owned()
-            }
-            _ => format!("cannot read the shot file: {e}"),
-        },
+        message,
         source_line: None,
-        hint: None,
+        hint: hint.map(str::to_owned),
+    };
+    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => error(
+            0,
+            0,
+            "no such shot file".to_owned(),
+            Some("check the path; `beeswarm bake` without a file bakes the built-in demo shot"),
+        ),
+        std::io::ErrorKind::IsADirectory => {
+            error(0, 0, "this is a folder, not a shot file".to_owned(), None)
+        }
+        _ => error(0, 0, format!("cannot read the shot file: {e}"), None),
+    })?;
+    let src = String::from_utf8(bytes).map_err(|e| {
+        // Point at the first byte that is not UTF-8 (binary data, or another encoding).
+        let valid = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = String::from_utf8_lossy(&bytes[..valid]);
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
+        error(
+            line,
+            column,
+            format!(
+                "not a text file: byte 0x{:02x} is not UTF-8 (expected TOML text in UTF-8)",
+                bytes[valid]
+            ),
+            Some("save the shot as UTF-8 text, or check that this is the right file"),
+        )
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse(&src, path, &base)

@@ -118,9 +118,52 @@ fn is_identifier(s: &str) -> bool {
         && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
 }
 
-/// Rewrites serde's type names into words an artist reads.
+/// Suggests the closest known key for serde's "unknown field `x`, expected one of `a`, `b`".
+fn unknown_field_hint(message: &str) -> String {
+    let quoted_words: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
+    let suggestion = quoted_words.split_first().and_then(|(unknown, known)| {
+        let unknown = unknown.to_ascii_lowercase();
+        known
+            .iter()
+            .map(|k| (edit_distance(&unknown, &k.to_ascii_lowercase()), *k))
+            .filter(|(d, k)| *d <= 2.max(k.len() / 3))
+            .min_by_key(|(d, _)| *d)
+            .map(|(_, k)| k)
+    });
+    match suggestion {
+        Some(k) => format!("did you mean `{k}`? docs/shot-format.md lists every key"),
+        None => "check the spelling; docs/shot-format.md lists every key".to_owned(),
+    }
+}
+
+/// Levenshtein distance, counting a swap of two neighbouring letters as one edit.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut best = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                best = best.min(d[i - 2][j - 2] + 1);
+            }
+            d[i][j] = best;
+        }
+    }
+    d[a.len()][b.len()]
+}
+
+/// Rewrites serde's type names into words an artist reads, on one line.
 fn friendly(msg: &str) -> String {
-    let mut m = msg.trim().to_owned();
+    let mut m = msg.trim().replace('\n', ", ");
     for (from, to) in [
         ("expected i64", "expected a whole number"),
         ("expected f64", "expected a number"),
@@ -155,7 +198,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             let mut message = friendly(e.message());
             let mut hint = None;
             if message.starts_with("unknown field") {
-                hint = Some("check the spelling; docs/shot-format.md lists every key".to_owned());
+                hint = Some(unknown_field_hint(&message));
             } else if key.is_empty() && !message.contains("missing field") {
                 message = format!("not valid TOML: {message}");
             }
@@ -170,8 +213,8 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             });
         }
     };
-    if let Some(p) = cx.loc.non_finite.first() {
-        return Err(cx.err(p, "expected a finite number, found nan or inf"));
+    if let Some((p, v)) = cx.loc.non_finite.first() {
+        return Err(cx.err(p, format!("expected a finite number, found {v}")));
     }
 
     // [scene]
@@ -188,6 +231,28 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             .all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
         || name.starts_with('.')
     {
+        if scene.name.is_none() {
+            // The name came from the file name: say so, and suggest one to write.
+            let safe: String = name
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || "_-.".contains(c) {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            let safe = safe.trim_start_matches('.');
+            let safe = if safe.is_empty() { d::SHOT_NAME } else { safe };
+            return Err(cx.hint(
+                "scene.name",
+                format!(
+                    "the shot is named after its file, \"{name}\", which is not a file-safe name (letters, digits, _ - .)"
+                ),
+                format!("name it in the shot: [scene] name = \"{safe}\", or rename the file"),
+            ));
+        }
         return Err(cx.hint(
             "scene.name",
             format!("expected a file-safe name (letters, digits, _ - .), found \"{name}\""),
@@ -295,7 +360,10 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         ro.wing_flap_hz.unwrap_or(d::WING_FLAP_HZ),
         0.0,
         fps / 2.0,
-        "a visible flap rate from 0 (blurred) up to half the frame rate",
+        &format!(
+            "a visible flap rate from 0 (blurred) up to half the frame rate ({} Hz at {fps} fps)",
+            fps / 2.0
+        ),
     )?;
     let clip = ro.usda_clip_frames.unwrap_or(d::USDA_CLIP_FRAMES);
     let usda_clip_frames = cx.range(
@@ -391,7 +459,7 @@ pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
         line: 0,
         column: 0,
         key: String::new(),
-        message: format!("cannot read the preset file: {e}"),
+        message: format!("cannot read the preset file {}: {e}", path.display()),
         source_line: None,
         hint: Some(format!("built-in presets: {}", quoted(&BeeParams::PRESETS))),
     })?;
@@ -402,16 +470,32 @@ pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
     let raw: RawPresetFile = toml::from_str(&src).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let (line, column, source_line) = cx.loc.line_col(span.start);
+        let mut message = friendly(e.message());
+        let mut hint = None;
+        let mut key = cx.loc.path_at(span.start).unwrap_or_default();
+        if message.starts_with("unknown field") {
+            hint = Some(unknown_field_hint(&message));
+        } else if message == "missing field `preset`" {
+            key = "preset".to_owned();
+            message = "missing the [preset] table".to_owned();
+            hint = Some(
+                "a preset file starts with [preset] (name, base, description, provenance), then [params]"
+                    .to_owned(),
+            );
+        }
         ShotError {
             file: path.to_path_buf(),
             line,
             column,
-            key: cx.loc.path_at(span.start).unwrap_or_default(),
-            message: friendly(e.message()),
+            key,
+            message,
             source_line: Some(source_line),
-            hint: None,
+            hint,
         }
     })?;
+    if let Some((p, v)) = cx.loc.non_finite.first() {
+        return Err(cx.err(p, format!("expected a finite number, found {v}")));
+    }
     let base = raw.preset.base.as_deref().unwrap_or(d::PRESET);
     let mut params = BeeParams::preset(base).ok_or_else(|| {
         cx.err(
@@ -464,6 +548,12 @@ fn resolve_swarm(
             }
             e
         })?;
+    if count > 10_000_000 {
+        return Err(cx.err(
+            &k("count"),
+            format!("expected at most 10000000 bees, found {count}"),
+        ));
+    }
     if count < 1 {
         return Err(cx.hint(
             &k("count"),
@@ -485,12 +575,20 @@ fn resolve_swarm(
         Some(p) => p,
         None if preset.ends_with(".toml") => {
             load_preset_file(&base.join(&preset)).map_err(|e| {
-                let mut outer = cx.err(
-                    &k("preset"),
-                    format!("cannot use preset file \"{preset}\": {}", e.message),
-                );
-                outer.hint = Some(e.to_string());
-                outer
+                if e.line == 0 {
+                    // Unreadable: say so here, where the file is named.
+                    let mut outer = cx.err(&k("preset"), e.message);
+                    outer.hint = e.hint;
+                    outer
+                } else {
+                    // An error inside the preset file: show it, located in that file.
+                    let mut outer = cx.err(
+                        &k("preset"),
+                        format!("the preset file \"{preset}\" has an error (below)"),
+                    );
+                    outer.hint = Some(e.to_string());
+                    outer
+                }
             })?
         }
         None => {
@@ -510,11 +608,30 @@ fn resolve_swarm(
 
     let rsp = rs.spawn.clone().unwrap_or_default();
     let center = cx.vec(&k("spawn.center"), rsp.center.unwrap_or(d::SPAWN_CENTER))?;
-    let spawn = match cx.one_of(
+    let shape = cx.one_of(
         &k("spawn.shape"),
         rsp.shape.as_deref().unwrap_or("box"),
         &["box", "sphere"],
-    )? {
+    )?;
+    // A key of the other shape would be silently ignored: say so instead.
+    let (stray, hint) = match shape {
+        "box" => (
+            rsp.radius.map(|_| "radius"),
+            "a box takes center and size; for a sphere write shape = \"sphere\"",
+        ),
+        _ => (
+            rsp.size.map(|_| "size"),
+            "a sphere takes center and radius; for a box write shape = \"box\"",
+        ),
+    };
+    if let Some(key) = stray {
+        return Err(cx.hint(
+            &k(&format!("spawn.{key}")),
+            format!("a {shape} spawn region has no `{key}`"),
+            hint,
+        ));
+    }
+    let spawn = match shape {
         "box" => Region::Box {
             center,
             half: cx.size(&k("spawn.size"), rsp.size.unwrap_or(d::SPAWN_SIZE))? * 0.5,
@@ -784,13 +901,13 @@ fn resolve_target(
                     "the key's position [x, y, z]",
                 )?,
             )?;
-            if let Some(&(prev, _)) = keys.last() {
-                if f <= prev {
-                    return Err(cx.err(
-                        &k(&format!("keys[{j}].frame")),
-                        format!("expected key frames in increasing order, found {f} after {prev}"),
-                    ));
-                }
+            if let Some(&(prev, _)) = keys.last()
+                && f <= prev
+            {
+                return Err(cx.err(
+                    &k(&format!("keys[{j}].frame")),
+                    format!("expected key frames in increasing order, found {f} after {prev}"),
+                ));
             }
             keys.push((f, p));
         }
@@ -856,10 +973,8 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
             for b in 0..=n {
                 for e in 0..=n {
                     let f = Vec3::new(a as f32, b as f32, e as f32) / n as f32 * 2.0 - Vec3::ONE;
-                    if let Region::Sphere { .. } = s.spawn {
-                        if f.length() > 1.0 {
-                            continue;
-                        }
+                    if matches!(s.spawn, Region::Sphere { .. }) && f.length() > 1.0 {
+                        continue;
                     }
                     let p = c + f * h;
                     if !shot

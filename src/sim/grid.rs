@@ -17,6 +17,8 @@ pub struct Grid {
     /// `starts[c]..starts[c + 1]` indexes `items` for cell c.
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// Positions in `items` order, so candidate tests read one contiguous array.
+    sorted: Vec<Vec3>,
     cells: Vec<u32>,
 }
 
@@ -84,12 +86,40 @@ impl Grid {
             self.items[fill[c as usize] as usize] = i as u32;
             fill[c as usize] += 1;
         }
+        self.sorted.clear();
+        self.sorted
+            .extend(self.items.iter().map(|&i| positions[i as usize]));
+    }
+
+    /// Calls `f(j, p_j)` for every point within `radius` of `p` (radius ≤ the cell edge),
+    /// in a fixed order.
+    #[inline]
+    pub fn for_each_within(&self, p: Vec3, radius: f32, mut f: impl FnMut(usize, Vec3, f32)) {
+        let r2 = radius * radius;
+        self.for_each_range(p, |a, b| {
+            for (k, q) in self.sorted[a..b].iter().enumerate() {
+                let d2 = p.distance_squared(*q);
+                if d2 < r2 {
+                    f(self.items[a + k] as usize, *q, d2);
+                }
+            }
+        });
     }
 
     /// Calls `f(j)` for every indexed point in the 27 cells around `p` (a superset of the
     /// points within one cell edge of `p`; callers test the distance).
     #[inline]
     pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(usize)) {
+        self.for_each_range(p, |a, b| {
+            for &j in &self.items[a..b] {
+                f(j as usize);
+            }
+        });
+    }
+
+    /// The 9 runs of `items` covering the 27 cells around `p`.
+    #[inline]
+    fn for_each_range(&self, p: Vec3, mut f: impl FnMut(usize, usize)) {
         let c = self.cell_of(p);
         let x0 = (c.x - 1).max(0);
         let x1 = (c.x + 1).min(self.dims.x - 1);
@@ -97,9 +127,7 @@ impl Grid {
             for y in (c.y - 1).max(0)..=(c.y + 1).min(self.dims.y - 1) {
                 let a = self.starts[self.index(IVec3::new(x0, y, z))] as usize;
                 let b = self.starts[self.index(IVec3::new(x1, y, z)) + 1] as usize;
-                for &j in &self.items[a..b] {
-                    f(j as usize);
-                }
+                f(a, b);
             }
         }
     }
@@ -120,12 +148,20 @@ mod tests {
                     found.push(j)
                 }
             });
+            let mut within = Vec::new();
+            g.for_each_within(pts[i], r, |j, q, d2| {
+                assert_eq!(q, pts[j]);
+                assert!((d2 - q.distance_squared(pts[i])).abs() < 1e-9);
+                within.push(j)
+            });
+            within.sort();
             let mut brute: Vec<usize> = (0..pts.len())
                 .filter(|&j| pts[j].distance(pts[i]) < r)
                 .collect();
             found.sort();
             brute.sort();
             assert_eq!(found, brute);
+            assert_eq!(within, brute);
         }
     }
 

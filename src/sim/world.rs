@@ -18,8 +18,58 @@ use rayon::prelude::*;
 /// velocity (a short lag lets a pushed-back bee fly backwards briefly, as real bees do),
 /// how fast the roll reaches its target, and the smoothing of the mean path for sway.
 const YAW_LAG_S: f32 = 0.06;
-const ROLL_LAG_S: f32 = 0.08;
+const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
+
+/// Per-step blend factors 1 − exp(−dt/τ) of the first-order lags above.
+struct Lags {
+    yaw: f32,
+    roll: f32,
+    sway: f32,
+}
+
+impl Lags {
+    fn new(dt: f32) -> Self {
+        let f = |tau: f32| 1.0 - (-dt / tau).exp();
+        Lags {
+            yaw: f(YAW_LAG_S),
+            roll: f(ROLL_LAG_S),
+            sway: f(SWAY_PATH_S),
+        }
+    }
+}
+
+/// Neighbours cached per bee by the density pass for the force pass: one grid walk per
+/// substep instead of two. A bee with more neighbours than fit falls back to the grid.
+const CACHED_NEIGHBOURS: usize = 40;
+
+#[derive(Clone, Copy)]
+struct Neighbours {
+    len: u8,
+    overflow: bool,
+    idx: [u32; CACHED_NEIGHBOURS],
+}
+
+impl Default for Neighbours {
+    fn default() -> Self {
+        Neighbours {
+            len: 0,
+            overflow: false,
+            idx: [0; CACHED_NEIGHBOURS],
+        }
+    }
+}
+
+impl Neighbours {
+    fn push(&mut self, j: usize) {
+        if (self.len as usize) < CACHED_NEIGHBOURS {
+            self.idx[self.len as usize] = j as u32;
+            self.len += 1;
+        } else {
+            self.overflow = true;
+        }
+    }
+}
 
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
@@ -32,9 +82,10 @@ struct Bee {
     yaw: f32,
     pitch_deg: f32,
     roll_deg: f32,
-    orient: Quat,
-    /// rad/s, world frame.
-    ang_vel: Vec3,
+    /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
+    /// velocity is the rotation between the two attitudes over that substep. Quaternions
+    /// are only built when a frame is recorded.
+    prev_attitude: (f32, f32, f32),
     density: f32,
     pressure: f32,
     swarm: u32,
@@ -44,6 +95,20 @@ struct Bee {
     speed: f32,
     phase_pitch: f32,
     phase_roll: f32,
+}
+
+impl Bee {
+    fn orientation(&self) -> Quat {
+        math::body_orientation(
+            self.yaw,
+            self.pitch_deg.to_radians(),
+            self.roll_deg.to_radians(),
+        )
+    }
+    fn prev_orientation(&self) -> Quat {
+        let (y, p, r) = self.prev_attitude;
+        math::body_orientation(y, p.to_radians(), r.to_radians())
+    }
 }
 
 /// Per-swarm constants, precomputed in f32.
@@ -87,6 +152,7 @@ pub struct Simulation {
     targets: Vec<TargetRt>,
     bees: Vec<Bee>,
     next: Vec<Bee>,
+    neighbours: Vec<Neighbours>,
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
@@ -127,7 +193,7 @@ impl Simulation {
                     wing_area: s.bee.wing_area,
                     mean_cl: oscillation::mean_lift_coefficient(),
                     curl: CurlNoise::new(
-                        math::mix64(shot.seed ^ (si as u64 + 1) * 0x51ED),
+                        math::mix64(shot.seed ^ ((si as u64 + 1) * 0x51ED)),
                         p.noise_cell,
                         p.noise_gain,
                     ),
@@ -232,12 +298,7 @@ impl Simulation {
                     yaw,
                     pitch_deg,
                     roll_deg,
-                    orient: math::body_orientation(
-                        yaw,
-                        pitch_deg.to_radians(),
-                        roll_deg.to_radians(),
-                    ),
-                    ang_vel: Vec3::ZERO,
+                    prev_attitude: (yaw, pitch_deg, roll_deg),
                     density: 0.0,
                     pressure: 0.0,
                     swarm: si as u32,
@@ -254,6 +315,7 @@ impl Simulation {
             swarms,
             targets,
             next: bees.clone(),
+            neighbours: Vec::new(),
             bees,
             positions: Vec::new(),
             grid: Grid::default(),
@@ -264,6 +326,22 @@ impl Simulation {
         };
         sim.update_record();
         sim
+    }
+
+    /// Places bee `index` (shot order) at `position` with `velocity` and re-records the
+    /// current frame: for tests and tools that need exact starting conditions.
+    pub fn set_bee(&mut self, index: usize, position: Vec3, velocity: Vec3) {
+        let b = &mut self.bees[index];
+        b.pos = position;
+        b.vel = velocity;
+        b.mean_pos = position;
+        // The heading follows the new direction of travel at once.
+        let horizontal = Vec3::new(velocity.x, 0.0, velocity.z);
+        if horizontal.length() > 0.02 {
+            b.yaw = math::yaw_of(horizontal);
+        }
+        b.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
+        self.update_record();
     }
 
     pub fn shot(&self) -> &Shot {
@@ -337,46 +415,77 @@ impl Simulation {
         self.positions.extend(self.bees.iter().map(|b| b.pos));
         self.grid.build(&self.positions, self.grid_cell);
 
-        // Pass 1: density and pressure (Eq. 10) for bees of the bee model.
-        let densities: Vec<(f32, f32)> = (0..self.bees.len())
+        // Pass 1: neighbours, and density and pressure (Eq. 10) for bees of the bee model.
+        let densities: Vec<(f32, f32, Neighbours)> = (0..self.bees.len())
             .into_par_iter()
             .with_min_len(256)
             .map(|i| self.density(i))
             .collect();
-        for (b, (d, p)) in self.bees.iter_mut().zip(densities) {
+        self.neighbours.clear();
+        for (b, (d, p, n)) in self.bees.iter_mut().zip(densities) {
             b.density = d;
             b.pressure = p;
+            self.neighbours.push(n);
         }
         // Pass 2: forces and integration.
         let step_index = self.step_index;
+        let lags = Lags::new(dt);
         let next: Vec<Bee> = (0..self.bees.len())
             .into_par_iter()
             .with_min_len(128)
-            .map(|i| self.integrate(i, t, dt, step_index))
+            .map(|i| self.integrate(i, t, dt, &lags, step_index))
             .collect();
         self.next = next;
         std::mem::swap(&mut self.bees, &mut self.next);
         self.step_index += 1;
     }
 
-    fn density(&self, i: usize) -> (f32, f32) {
+    /// Every other bee within interaction reach of bee i, in grid order: the cached list,
+    /// or a grid walk when the list overflowed.
+    #[inline]
+    fn for_each_neighbour(&self, i: usize, reach: f32, mut f: impl FnMut(usize, Vec3, f32)) {
+        let p = self.bees[i].pos;
+        let n = &self.neighbours[i];
+        if n.overflow {
+            self.grid.for_each_within(p, reach, |j, pj, d2| {
+                if j != i {
+                    f(j, pj, d2)
+                }
+            });
+        } else {
+            for &j in &n.idx[..n.len as usize] {
+                let pj = self.bees[j as usize].pos;
+                f(j as usize, pj, p.distance_squared(pj));
+            }
+        }
+    }
+
+    fn density(&self, i: usize) -> (f32, f32, Neighbours) {
         let b = &self.bees[i];
         let s = &self.swarms[b.swarm as usize];
-        if s.model != ModelKind::Bee {
-            return (0.0, 0.0);
-        }
         let ri = s.radius * b.size;
-        let mut rho = 0.0;
         let reach = s.h + ri + self.max_body_radius;
-        self.grid.for_each_near(b.pos, |j| {
-            let o = &self.bees[j];
-            let d2 = b.pos.distance_squared(o.pos);
-            if d2 >= reach * reach {
-                return;
+        let bee_model = s.model == ModelKind::Bee;
+        let mut rho = 0.0;
+        let mut list = Neighbours::default();
+        self.grid.for_each_within(b.pos, reach, |j, _, d2| {
+            if j != i {
+                list.push(j);
             }
-            let so = &self.swarms[o.swarm as usize];
-            rho += repulsion::density_term(&s.kernels, so.mass, d2.sqrt(), ri + so.radius * o.size);
+            if bee_model {
+                let o = &self.bees[j];
+                let so = &self.swarms[o.swarm as usize];
+                rho += repulsion::density_term(
+                    &s.kernels,
+                    so.mass,
+                    d2.sqrt(),
+                    ri + so.radius * o.size,
+                );
+            }
         });
+        if !bee_model {
+            return (0.0, 0.0, list);
+        }
         for &ti in &s.targets {
             let tr = &self.targets[ti];
             if b.pos.distance(tr.center) > tr.bounding + s.h + ri {
@@ -391,7 +500,11 @@ impl Simulation {
                 );
             }
         }
-        (rho, repulsion::pressure(s.stiffness, rho, s.rest_density))
+        (
+            rho,
+            repulsion::pressure(s.stiffness, rho, s.rest_density),
+            list,
+        )
     }
 
     /// A deterministic direction separating coincident bees i and j (opposite for j and i).
@@ -400,7 +513,7 @@ impl Simulation {
         Rng::new(a as u64, b as u64, 0x5EA).unit_vector() * sign
     }
 
-    fn integrate(&self, i: usize, t: f64, dt: f32, step_index: u64) -> Bee {
+    fn integrate(&self, i: usize, t: f64, dt: f32, lags: &Lags, step_index: u64) -> Bee {
         let b = self.bees[i];
         let s = &self.swarms[b.swarm as usize];
         let shot = &self.shot;
@@ -412,17 +525,10 @@ impl Simulation {
         let mut a_rep = Vec3::ZERO;
         let mut a_col = Vec3::ZERO;
         let mut hood = boids::Neighbourhood::default();
-        self.grid.for_each_near(b.pos, |j| {
-            if j == i {
-                return;
-            }
+        let reach = s.h + ri + self.max_body_radius;
+        self.for_each_neighbour(i, reach, |j, pj, d2| {
             let o = &self.bees[j];
-            let r = b.pos - o.pos;
-            let d2 = r.length_squared();
-            let reach = s.h + ri + self.max_body_radius;
-            if d2 >= reach * reach {
-                return;
-            }
+            let r = b.pos - pj;
             let so = &self.swarms[o.swarm as usize];
             let dist = d2.sqrt();
             let contact = ri + so.radius * o.size;
@@ -515,8 +621,7 @@ impl Simulation {
                         gamma = vision::ramp((d / s.d0).max(0.0)).abs();
                     }
                 }
-                out.roll_deg =
-                    b.roll_deg + (roll_target - b.roll_deg) * (1.0 - (-dt / ROLL_LAG_S).exp());
+                out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * lags.roll;
                 let f_o = oscillation::accel(
                     out.pitch_deg,
                     out.roll_deg,
@@ -577,20 +682,15 @@ impl Simulation {
             let mut dy = target - b.yaw;
             dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
                 - std::f32::consts::PI;
-            out.yaw =
-                (b.yaw + dy * (1.0 - (-dt / YAW_LAG_S).exp())).rem_euclid(std::f32::consts::TAU);
+            out.yaw = (b.yaw + dy * lags.yaw).rem_euclid(std::f32::consts::TAU);
         }
-        out.mean_pos = b.mean_pos + (pos - b.mean_pos) * (1.0 - (-dt / SWAY_PATH_S).exp());
-        out.orient = math::body_orientation(
-            out.yaw,
-            out.pitch_deg.to_radians(),
-            out.roll_deg.to_radians(),
-        );
-        out.ang_vel = math::angular_velocity(b.orient, out.orient, dt);
+        out.mean_pos = b.mean_pos + (pos - b.mean_pos) * lags.sway;
+        out.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
         out
     }
 
     fn update_record(&mut self) {
+        let dt = self.shot.dt() as f32;
         let mut id = 0u64;
         let mut rec = std::mem::take(&mut self.record);
         rec.resize_with(self.shot.swarms.len(), SwarmFrame::default);
@@ -605,7 +705,7 @@ impl Simulation {
             f.velocity.clear();
             f.velocity.extend(bees.iter().map(|b| b.vel));
             f.orientation.clear();
-            f.orientation.extend(bees.iter().map(|b| b.orient));
+            f.orientation.extend(bees.iter().map(|b| b.orientation()));
             f.heading.clear();
             f.heading
                 .extend(bees.iter().map(|b| Quat::from_rotation_y(b.yaw)));
@@ -619,10 +719,10 @@ impl Simulation {
                     .map(|b| (b.pos - b.mean_pos).dot(Quat::from_rotation_y(b.yaw) * Vec3::Z)),
             );
             f.angular_velocity_deg.clear();
-            f.angular_velocity_deg.extend(
-                bees.iter()
-                    .map(|b| b.ang_vel * (180.0 / std::f32::consts::PI)),
-            );
+            f.angular_velocity_deg.extend(bees.iter().map(|b| {
+                math::angular_velocity(b.prev_orientation(), b.orientation(), dt)
+                    * (180.0 / std::f32::consts::PI)
+            }));
             f.scale.clear();
             f.scale.extend(bees.iter().map(|b| b.size));
             id += s.count as u64;

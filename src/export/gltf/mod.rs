@@ -1,0 +1,939 @@
+//! glTF 2.0 cache: `.glb`, or `.gltf` with its `.bin` beside it.
+//!
+//! Scene: one root node per swarm (named after it), one node per bee under it. Per bee:
+//!
+//! ```text
+//! bee_000123            translation = position − heading·(0,0,sway), rotation = heading
+//! └─ bee_000123_body    translation = (0,0,sway), rotation = Rz(pitch)·Rx(roll), scale,
+//!    │                  mesh = the striped body
+//!    ├─ bee_000123_wing_l   hinge on the thorax, flapping rotation (or a static blur pose)
+//!    └─ bee_000123_wing_r
+//! ```
+//!
+//! so an animator reads the path on the bee node and the body motion on its child, and the
+//! body node's world transform is exactly the simulated pose (its world position is the
+//! tracks CSV position). Every track is LINEAR and keyed once per frame on one shared time
+//! accessor, `(frame − start) / fps` seconds.
+//!
+//! Memory: the buffer wants each bee's history contiguous (node-major) but frames arrive
+//! one at a time (frame-major). Each frame's keys are appended to a scratch file as they
+//! come and transposed in blocks of bees at `finish`, so memory is about 100 bytes per bee
+//! plus one bounded block buffer, whatever the shot length. The JSON (about 1.5 kB per
+//! bee) is the part that grows with the bee count.
+
+mod mesh;
+
+pub use mesh::{BeeMesh, Primitive};
+
+use super::atomic::{AtomicFile, ScratchFile, SealedFile};
+use super::{CacheWriter, OutputOptions};
+use crate::error::{Error, Result};
+use crate::sim::{CacheMeta, Frame};
+use glam::{Quat, Vec3};
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+use json::{Index, Root};
+use std::fs::File;
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Which container to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Container {
+    /// One binary `.glb` file.
+    Glb,
+    /// `<shot>.gltf` JSON plus `<shot>.bin` beside it.
+    Gltf,
+}
+
+/// Wing stroke, degrees: the wing swings about the body X axis (the hinge line) by
+/// `WING_MID ± WING_AMPLITUDE`, positive raising the tip. The blurred pose is `WING_MID`.
+const WING_MID_DEG: f32 = 15.0;
+const WING_AMPLITUDE_DEG: f32 = 50.0;
+/// Bees flap in this many phase groups (by id) so a swarm does not beat in lockstep,
+/// while wing tracks stay shared: one pair of accessors per group, not per bee.
+const WING_PHASES: u64 = 8;
+/// Wing opacity: a visible flap shows the membrane, a blur is mostly see-through.
+const WING_ALPHA_FLAP: f32 = 0.45;
+const WING_ALPHA_BLUR: f32 = 0.18;
+
+/// Floats spilled per bee per frame: bee translation (3), bee rotation (4), sway (1),
+/// body rotation (4), scale (1). Stored little-endian, exactly the bytes the buffer holds.
+const RECORD_FLOATS: usize = 13;
+const RECORD_BYTES: usize = RECORD_FLOATS * 4;
+/// Upper bound of the transpose block at `finish`.
+const TRANSPOSE_BUDGET_BYTES: usize = 16 << 20;
+
+const F32: json::accessor::ComponentType = json::accessor::ComponentType::F32;
+
+/// Splits a simulated pose into the bee node (path) and body node (body motion) transforms.
+///
+/// Returns `(bee translation, bee rotation = heading, body rotation = heading⁻¹·orientation)`;
+/// the body translation is `(0, 0, sway)`. Then
+/// `bee_t + bee_r·(0,0,sway) = position` and `bee_r·body_r = orientation`.
+pub fn split_pose(
+    position: Vec3,
+    heading: Quat,
+    orientation: Quat,
+    sway: f32,
+) -> (Vec3, Quat, Quat) {
+    let heading = heading.normalize();
+    let body = (heading.conjugate() * orientation.normalize()).normalize();
+    (
+        position - heading * Vec3::new(0.0, 0.0, sway),
+        heading,
+        body,
+    )
+}
+
+/// `q` or `-q` (the same rotation), whichever is nearer `prev`, so that LINEAR (slerp)
+/// interpolation between consecutive keys takes the short way round.
+pub fn same_hemisphere(prev: Quat, q: Quat) -> Quat {
+    if prev.dot(q) < 0.0 { -q } else { q }
+}
+
+/// The first key of a track: `w ≥ 0`, purely for tidy, predictable files.
+fn canonical(q: Quat) -> Quat {
+    if q.w < 0.0 { -q } else { q }
+}
+
+/// Rotation of a wing raised by `up_deg` (tip up). The right wing's tip is +Z, so raising
+/// it is a negative turn about +X; the left wing mirrors it.
+pub fn wing_rotation(up_deg: f32, right: bool) -> Quat {
+    let a = up_deg.to_radians();
+    Quat::from_rotation_x(if right { -a } else { a })
+}
+
+/// Wing elevation in degrees at time `t` for phase group `group`.
+fn wing_angle(flap_hz: f64, t: f64, group: u64) -> f32 {
+    let phase = std::f64::consts::TAU * (flap_hz * t + group as f64 / WING_PHASES as f64);
+    WING_MID_DEG + WING_AMPLITUDE_DEG * phase.sin() as f32
+}
+
+/// Key times: exactly `(frame − start) / fps`, rounded once to f32.
+fn key_times(meta: &CacheMeta) -> Vec<f32> {
+    (0..meta.frame_count())
+        .map(|k| (k as f64 / meta.fps) as f32)
+        .collect()
+}
+
+pub fn bee_name(id: u64) -> String {
+    format!("bee_{id:06}")
+}
+
+/// Per-bee state kept in memory between frames (everything else is in the scratch file).
+#[derive(Clone, Copy, Debug)]
+struct BeeState {
+    /// First-frame record: the nodes' rest TRS, so a viewer without animation shows frame 1.
+    first: [f32; RECORD_FLOATS],
+    prev_bee_r: Quat,
+    prev_body_r: Quat,
+    /// Scale is nominally constant per bee; a scale track is written only if it is not.
+    scale_varies: bool,
+}
+
+pub struct GltfWriter {
+    container: Container,
+    /// `.glb` or `.gltf` destination.
+    dest: PathBuf,
+    meta: CacheMeta,
+    flap_hz: f64,
+    spill: Option<BufWriter<File>>,
+    scratch: ScratchFile,
+    /// Bee ids per swarm, from the first frame; every later frame must match.
+    ids: Vec<Vec<u64>>,
+    bees: Vec<BeeState>,
+    next_frame: i32,
+    record: Vec<u8>,
+    /// Size of the transpose block at `finish` (a field so tests can force many blocks).
+    transpose_budget: usize,
+}
+
+impl GltfWriter {
+    pub fn create(
+        container: Container,
+        path: &Path,
+        meta: &CacheMeta,
+        opts: &OutputOptions,
+    ) -> Result<Self> {
+        let flap_hz = opts.gltf_wing_flap_hz;
+        if !(meta.fps.is_finite() && meta.fps > 0.0) {
+            return Err(Error::input(format!(
+                "fps must be positive, got {}",
+                meta.fps
+            )));
+        }
+        if !(flap_hz.is_finite() && (0.0..=meta.fps / 2.0).contains(&flap_hz)) {
+            return Err(Error::input(format!(
+                "output.wing_flap_hz = {flap_hz}: must be from 0 (blurred wings) to half \
+                 the frame rate ({}), or the flap aliases",
+                meta.fps / 2.0
+            )));
+        }
+        if meta.frame_end < meta.frame_start {
+            return Err(Error::input("the frame range is empty"));
+        }
+        // Keys are f32 seconds; a very long shot at a high rate could round two frames to
+        // the same time, which glTF forbids (times must strictly increase).
+        if key_times(meta).windows(2).any(|t| t[1] <= t[0]) {
+            return Err(Error::input(format!(
+                "frames {}..={} at {} fps are too many for glTF's f32 key times; \
+                 split the shot or use usda",
+                meta.frame_start, meta.frame_end, meta.fps
+            )));
+        }
+        for s in &meta.swarms {
+            if !(s.bee_length_m.is_finite() && s.bee_length_m > 0.0) {
+                return Err(Error::input(format!(
+                    "swarm {}: bee length must be positive, got {}",
+                    s.name, s.bee_length_m
+                )));
+            }
+        }
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let scratch = ScratchFile::new(dir, "gltf");
+        let file = File::create(&scratch.path).map_err(|e| Error::io(&scratch.path, e))?;
+        Ok(GltfWriter {
+            container,
+            dest: path.to_path_buf(),
+            meta: meta.clone(),
+            flap_hz,
+            spill: Some(BufWriter::with_capacity(1 << 20, file)),
+            scratch,
+            ids: Vec::new(),
+            bees: Vec::new(),
+            next_frame: meta.frame_start,
+            record: Vec::new(),
+            transpose_budget: TRANSPOSE_BUDGET_BYTES,
+        })
+    }
+
+    fn bee_count(&self) -> usize {
+        self.bees.len()
+    }
+}
+
+impl CacheWriter for GltfWriter {
+    fn write_frame(&mut self, frame: &Frame) -> Result<()> {
+        if frame.frame != self.next_frame || frame.frame > self.meta.frame_end {
+            return Err(Error::bake(format!(
+                "glTF writer: got frame {}, expected {} (range {}..={})",
+                frame.frame, self.next_frame, self.meta.frame_start, self.meta.frame_end
+            )));
+        }
+        if frame.swarms.len() != self.meta.swarms.len() {
+            return Err(Error::bake(format!(
+                "glTF writer: frame {} has {} swarms, the cache {}",
+                frame.frame,
+                frame.swarms.len(),
+                self.meta.swarms.len()
+            )));
+        }
+        let first = frame.frame == self.meta.frame_start;
+        if first {
+            self.ids = frame.swarms.iter().map(|s| s.ids.clone()).collect();
+        }
+        self.record.clear();
+        let mut bee = 0;
+        for (si, s) in frame.swarms.iter().enumerate() {
+            let n = s.len();
+            let lengths = [
+                s.position.len(),
+                s.heading.len(),
+                s.orientation.len(),
+                s.sway_m.len(),
+                s.scale.len(),
+            ];
+            if lengths.iter().any(|&l| l != n) || s.ids != self.ids[si] {
+                return Err(Error::bake(format!(
+                    "glTF writer: swarm {} at frame {} does not have the bees of the first frame",
+                    self.meta.swarms[si].name, frame.frame
+                )));
+            }
+            for i in 0..n {
+                let (bee_t, bee_r, body_r) =
+                    split_pose(s.position[i], s.heading[i], s.orientation[i], s.sway_m[i]);
+                let scale = s.scale[i];
+                let finite = bee_t.is_finite()
+                    && bee_r.is_finite()
+                    && body_r.is_finite()
+                    && s.sway_m[i].is_finite()
+                    && scale.is_finite()
+                    && scale > 0.0;
+                if !finite {
+                    return Err(Error::bake(format!(
+                        "glTF writer: bee {} at frame {} has a non-finite pose or a \
+                         non-positive scale",
+                        s.ids[i], frame.frame
+                    )));
+                }
+                let (bee_r, body_r) = if first {
+                    (canonical(bee_r), canonical(body_r))
+                } else {
+                    let st = &self.bees[bee];
+                    (
+                        same_hemisphere(st.prev_bee_r, bee_r),
+                        same_hemisphere(st.prev_body_r, body_r),
+                    )
+                };
+                let rec: [f32; RECORD_FLOATS] = [
+                    bee_t.x,
+                    bee_t.y,
+                    bee_t.z,
+                    bee_r.x,
+                    bee_r.y,
+                    bee_r.z,
+                    bee_r.w,
+                    s.sway_m[i],
+                    body_r.x,
+                    body_r.y,
+                    body_r.z,
+                    body_r.w,
+                    scale,
+                ];
+                for v in rec {
+                    self.record.extend_from_slice(&v.to_le_bytes());
+                }
+                if first {
+                    self.bees.push(BeeState {
+                        first: rec,
+                        prev_bee_r: bee_r,
+                        prev_body_r: body_r,
+                        scale_varies: false,
+                    });
+                } else {
+                    let st = &mut self.bees[bee];
+                    st.prev_bee_r = bee_r;
+                    st.prev_body_r = body_r;
+                    st.scale_varies |= scale != st.first[12];
+                }
+                bee += 1;
+            }
+        }
+        let spill = self.spill.as_mut().expect("spill open until finish");
+        spill
+            .write_all(&self.record)
+            .map_err(|e| Error::io(&self.scratch.path, e))?;
+        self.next_frame += 1;
+        Ok(())
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<Vec<SealedFile>> {
+        if self.next_frame != self.meta.frame_end + 1 {
+            return Err(Error::bake(format!(
+                "glTF writer: finished after frame {} of {}..={}",
+                self.next_frame - 1,
+                self.meta.frame_start,
+                self.meta.frame_end
+            )));
+        }
+        let spill = self.spill.take().expect("spill open until finish");
+        spill
+            .into_inner()
+            .map_err(|e| Error::io(&self.scratch.path, e.into_error()))?;
+        let bin_name = bin_file_name(&self.dest);
+        let layout = Layout::build(&self, &bin_name);
+        match self.container {
+            Container::Glb => {
+                let mut out = AtomicFile::create(&self.dest)?;
+                write_glb(&self, &layout, &mut out)?;
+                Ok(vec![out.seal()?])
+            }
+            Container::Gltf => {
+                let bin_path = self.dest.with_file_name(&bin_name);
+                let mut bin = AtomicFile::create(&bin_path)?;
+                write_bin(&self, &layout, &mut bin)?;
+                let mut gltf = AtomicFile::create(&self.dest)?;
+                layout
+                    .root
+                    .to_writer(&mut gltf)
+                    .map_err(|e| Error::bake(format!("glTF JSON: {e}")))?;
+                // Both files are complete before either is renamed; the .bin goes first so
+                // a new .gltf never points at an old buffer.
+                Ok(vec![bin.seal()?, gltf.seal()?])
+            }
+        }
+    }
+}
+
+/// `<stem>.bin` beside `dest`.
+fn bin_file_name(dest: &Path) -> String {
+    let stem = dest
+        .file_stem()
+        .map(|s| s.to_string_lossy())
+        .unwrap_or_default();
+    format!("{stem}.bin")
+}
+
+/// Percent-encodes a file name for use as a relative URI.
+fn uri_encode(name: &str) -> String {
+    let mut out = String::new();
+    for b in name.bytes() {
+        if b.is_ascii_alphanumeric() || b"-._~".contains(&b) {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+/// The JSON document plus what is needed to stream the binary buffer that matches it.
+struct Layout {
+    root: Root,
+    /// Meshes, key times and wing tracks: small, built in memory, at the buffer's start.
+    head: Vec<u8>,
+    /// Byte length of the buffer (head + every bee's tracks).
+    total: u64,
+}
+
+/// Bytes of one bee's tracks: bee T, bee R, body T, body R, and body S if it varies.
+fn bee_bytes(frames: usize, scale_varies: bool) -> usize {
+    frames * (12 + 16 + 12 + 16 + if scale_varies { 12 } else { 0 })
+}
+
+fn pad4(v: &mut Vec<u8>, fill: u8) {
+    while !v.len().is_multiple_of(4) {
+        v.push(fill);
+    }
+}
+
+fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+    values.into_iter().flat_map(f32::to_le_bytes).collect()
+}
+
+/// A JSON number holding exactly the f32 value (the validator compares bounds exactly).
+fn exact(v: f32) -> json::Value {
+    json::Value::from(f64::from(v))
+}
+
+fn accessor(
+    view: Index<json::buffer::View>,
+    offset: usize,
+    count: usize,
+    component: json::accessor::ComponentType,
+    type_: json::accessor::Type,
+) -> json::Accessor {
+    json::Accessor {
+        buffer_view: Some(view),
+        byte_offset: (offset > 0).then_some(USize64(offset as u64)),
+        count: USize64(count as u64),
+        component_type: Valid(json::accessor::GenericComponentType(component)),
+        extensions: None,
+        extras: None,
+        type_: Valid(type_),
+        min: None,
+        max: None,
+        name: None,
+        normalized: false,
+        sparse: None,
+    }
+}
+
+fn node(name: String) -> json::Node {
+    json::Node {
+        name: Some(name),
+        ..Default::default()
+    }
+}
+
+fn material(name: &str, rgba: [f32; 4], roughness: f32, blend: bool) -> json::Material {
+    json::Material {
+        name: Some(name.into()),
+        alpha_mode: Valid(if blend {
+            json::material::AlphaMode::Blend
+        } else {
+            json::material::AlphaMode::Opaque
+        }),
+        double_sided: blend,
+        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+            base_color_factor: json::material::PbrBaseColorFactor(rgba),
+            metallic_factor: json::material::StrengthFactor(0.0),
+            roughness_factor: json::material::StrengthFactor(roughness),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn raw_extras(v: &serde_json::Value) -> json::Extras {
+    serde_json::value::RawValue::from_string(v.to_string()).ok()
+}
+
+impl Layout {
+    fn build(w: &GltfWriter, bin_name: &str) -> Layout {
+        use json::accessor::Type;
+        let meta = &w.meta;
+        let frames = meta.frame_count();
+        let mut root = Root::default();
+        let mut head: Vec<u8> = Vec::new();
+
+        let info = serde_json::json!({
+            "shot_name": meta.shot_name,
+            "fps": meta.fps,
+            "frame_start": meta.frame_start,
+            "frame_end": meta.frame_end,
+            "seed": meta.seed,
+            "tool_version": meta.tool_version,
+            "wing_flap_hz": w.flap_hz,
+            "units": "metres",
+            "up_axis": "Y",
+        });
+        root.asset = json::Asset {
+            generator: Some(format!("beeswarm {}", meta.tool_version)),
+            version: "2.0".into(),
+            extras: raw_extras(&info),
+            ..Default::default()
+        };
+        let buffer = root.push(json::Buffer {
+            byte_length: USize64(0), // set below, once every region is placed
+            name: None,
+            uri: match w.container {
+                Container::Glb => None,
+                Container::Gltf => Some(uri_encode(bin_name)),
+            },
+            extensions: None,
+            extras: None,
+        });
+        let view = |root: &mut Root,
+                    head: &mut Vec<u8>,
+                    bytes: &[u8],
+                    target: Option<json::buffer::Target>| {
+            let offset = head.len();
+            head.extend_from_slice(bytes);
+            pad4(head, 0);
+            root.push(json::buffer::View {
+                buffer,
+                byte_length: USize64(bytes.len() as u64),
+                byte_offset: (offset > 0).then_some(USize64(offset as u64)),
+                byte_stride: None,
+                name: None,
+                target: target.map(Valid),
+                extensions: None,
+                extras: None,
+            })
+        };
+
+        // Materials, shared by every mesh.
+        let wing_alpha = if w.flap_hz > 0.0 {
+            WING_ALPHA_FLAP
+        } else {
+            WING_ALPHA_BLUR
+        };
+        let yellow = root.push(material("bee_yellow", [0.85, 0.55, 0.05, 1.0], 0.6, false));
+        let black = root.push(material("bee_black", [0.03, 0.025, 0.02, 1.0], 0.45, false));
+        let wing_mat = root.push(material(
+            "bee_wing",
+            [0.8, 0.85, 0.9, wing_alpha],
+            0.25,
+            true,
+        ));
+
+        // One mesh set per distinct bee length (usually one for the whole shot).
+        struct MeshSet {
+            length_bits: u32,
+            body: Index<json::Mesh>,
+            wing_l: Index<json::Mesh>,
+            wing_r: Index<json::Mesh>,
+            hinge_r: Vec3,
+        }
+        let mut sets: Vec<MeshSet> = Vec::new();
+        let mut swarm_set = Vec::new();
+        for s in &meta.swarms {
+            let bits = s.bee_length_m.to_bits();
+            if let Some(k) = sets.iter().position(|m| m.length_bits == bits) {
+                swarm_set.push(k);
+                continue;
+            }
+            let bee = BeeMesh::new(s.bee_length_m);
+            let prim =
+                |root: &mut Root, head: &mut Vec<u8>, p: &Primitive, mat: Index<json::Material>| {
+                    let (lo, hi) = p.bounds();
+                    let pos_bytes = f32_bytes(p.positions.iter().flatten().copied());
+                    let nrm_bytes = f32_bytes(p.normals.iter().flatten().copied());
+                    let idx_bytes: Vec<u8> =
+                        p.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+                    let tv = Some(json::buffer::Target::ArrayBuffer);
+                    let pv = view(root, head, &pos_bytes, tv);
+                    let nv = view(root, head, &nrm_bytes, tv);
+                    let iv = view(
+                        root,
+                        head,
+                        &idx_bytes,
+                        Some(json::buffer::Target::ElementArrayBuffer),
+                    );
+                    let n = p.positions.len();
+                    let mut pa = accessor(pv, 0, n, F32, Type::Vec3);
+                    pa.min = Some(json::Value::Array(lo.into_iter().map(exact).collect()));
+                    pa.max = Some(json::Value::Array(hi.into_iter().map(exact).collect()));
+                    let pa = root.push(pa);
+                    let na = root.push(accessor(nv, 0, n, F32, Type::Vec3));
+                    let ia = root.push(accessor(
+                        iv,
+                        0,
+                        p.indices.len(),
+                        json::accessor::ComponentType::U16,
+                        Type::Scalar,
+                    ));
+                    json::mesh::Primitive {
+                        attributes: [
+                            (Valid(json::mesh::Semantic::Positions), pa),
+                            (Valid(json::mesh::Semantic::Normals), na),
+                        ]
+                        .into(),
+                        extensions: None,
+                        extras: None,
+                        indices: Some(ia),
+                        material: Some(mat),
+                        mode: Valid(json::mesh::Mode::Triangles),
+                        targets: None,
+                    }
+                };
+            let tag = format!("bee_{}mm", fmt_mm(s.bee_length_m));
+            let body = json::Mesh {
+                name: Some(format!("{tag}_body")),
+                primitives: vec![
+                    prim(&mut root, &mut head, &bee.body_yellow, yellow),
+                    prim(&mut root, &mut head, &bee.body_black, black),
+                ],
+                extensions: None,
+                extras: None,
+                weights: None,
+            };
+            let wing =
+                |root: &mut Root, head: &mut Vec<u8>, p: &Primitive, side: &str| json::Mesh {
+                    name: Some(format!("{tag}_wing_{side}")),
+                    primitives: vec![prim(root, head, p, wing_mat)],
+                    extensions: None,
+                    extras: None,
+                    weights: None,
+                };
+            let wing_l = wing(&mut root, &mut head, &bee.wing_left, "l");
+            let wing_r = wing(&mut root, &mut head, &bee.wing_right, "r");
+            swarm_set.push(sets.len());
+            sets.push(MeshSet {
+                length_bits: bits,
+                body: root.push(body),
+                wing_l: root.push(wing_l),
+                wing_r: root.push(wing_r),
+                hinge_r: bee.wing_hinge_right,
+            });
+        }
+
+        // The one time accessor every sampler shares.
+        let bees = w.bee_count();
+        let animated = bees > 0;
+        let times = key_times(meta);
+        let time_acc = animated.then(|| {
+            let tv = view(
+                &mut root,
+                &mut head,
+                &f32_bytes(times.iter().copied()),
+                None,
+            );
+            let mut a = accessor(tv, 0, frames, F32, Type::Scalar);
+            a.min = Some(json::Value::Array(vec![exact(times[0])]));
+            a.max = Some(json::Value::Array(vec![exact(times[frames - 1])]));
+            a.name = Some("time".into());
+            root.push(a)
+        });
+
+        // Wing tracks, one (left, right) pair per phase group in use, shared by many bees.
+        let flapping = animated && w.flap_hz > 0.0;
+        let mut wing_tracks: Vec<Option<(Index<json::Accessor>, Index<json::Accessor>)>> =
+            vec![None; WING_PHASES as usize];
+        if flapping {
+            let mut used = [false; WING_PHASES as usize];
+            for id in w.ids.iter().flatten() {
+                used[(id % WING_PHASES) as usize] = true;
+            }
+            let groups: Vec<u64> = (0..WING_PHASES).filter(|&g| used[g as usize]).collect();
+            let mut bytes = Vec::new();
+            for &g in &groups {
+                for right in [false, true] {
+                    for k in 0..frames {
+                        let t = k as f64 / meta.fps;
+                        let q = wing_rotation(wing_angle(w.flap_hz, t, g), right);
+                        bytes.extend(f32_bytes(q.to_array()));
+                    }
+                }
+            }
+            let wv = view(&mut root, &mut head, &bytes, None);
+            for (slot, &g) in groups.iter().enumerate() {
+                let track = |side: usize| (slot * 2 + side) * frames * 16;
+                let l = root.push(accessor(wv, track(0), frames, F32, Type::Vec4));
+                let r = root.push(accessor(wv, track(1), frames, F32, Type::Vec4));
+                wing_tracks[g as usize] = Some((l, r));
+            }
+        }
+
+        // Bees: one buffer view per bee holding its tracks back to back.
+        let mut offset = head.len() as u64;
+        let mut channels = Vec::new();
+        let mut samplers = Vec::new();
+        let track = |samplers: &mut Vec<json::animation::Sampler>,
+                     channels: &mut Vec<json::animation::Channel>,
+                     node: Index<json::Node>,
+                     output: Index<json::Accessor>,
+                     path: json::animation::Property| {
+            let sampler = Index::push(
+                samplers,
+                json::animation::Sampler {
+                    extensions: None,
+                    extras: None,
+                    input: time_acc.expect("tracks only when animated"),
+                    interpolation: Valid(json::animation::Interpolation::Linear),
+                    output,
+                },
+            );
+            channels.push(json::animation::Channel {
+                sampler,
+                target: json::animation::Target {
+                    extensions: None,
+                    extras: None,
+                    node,
+                    path: Valid(path),
+                },
+                extensions: None,
+                extras: None,
+            });
+        };
+        use json::animation::Property::{Rotation, Scale, Translation};
+        let mut scene_nodes = Vec::new();
+        let mut g = 0;
+        for (si, s) in meta.swarms.iter().enumerate() {
+            let set = &sets[swarm_set[si]];
+            let swarm_root = root.push(node(s.name.clone()));
+            scene_nodes.push(swarm_root);
+            let mut children = Vec::new();
+            for &id in &w.ids[si] {
+                let st = &w.bees[g];
+                let f = &st.first;
+                g += 1;
+                let size = bee_bytes(frames, st.scale_varies);
+                let bv = root.push(json::buffer::View {
+                    buffer,
+                    byte_length: USize64(size as u64),
+                    byte_offset: Some(USize64(offset)),
+                    byte_stride: None,
+                    name: None,
+                    target: None,
+                    extensions: None,
+                    extras: None,
+                });
+                offset += size as u64;
+                let bee_t = root.push(accessor(bv, 0, frames, F32, Type::Vec3));
+                let bee_r = root.push(accessor(bv, frames * 12, frames, F32, Type::Vec4));
+                let body_t = root.push(accessor(bv, frames * 28, frames, F32, Type::Vec3));
+                let body_r = root.push(accessor(bv, frames * 40, frames, F32, Type::Vec4));
+                let body_s = st
+                    .scale_varies
+                    .then(|| root.push(accessor(bv, frames * 56, frames, F32, Type::Vec3)));
+
+                let name = bee_name(id);
+                let group = (id % WING_PHASES) as usize;
+                let wing_pose = |right: bool| {
+                    let up = if flapping {
+                        wing_angle(w.flap_hz, 0.0, group as u64)
+                    } else {
+                        WING_MID_DEG
+                    };
+                    json::scene::UnitQuaternion(wing_rotation(up, right).to_array())
+                };
+                let hinge = |right: bool| {
+                    let z = if right { set.hinge_r.z } else { -set.hinge_r.z };
+                    [set.hinge_r.x, set.hinge_r.y, z]
+                };
+                // Parents before children in the node list, so the document reads top-down.
+                let at = |k: usize| Index::<json::Node>::new((root.nodes.len() + k) as u32);
+                let (bee, body, wing_l, wing_r) = (at(0), at(1), at(2), at(3));
+                root.push(json::Node {
+                    children: Some(vec![body]),
+                    translation: Some([f[0], f[1], f[2]]),
+                    rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
+                    ..node(name.clone())
+                });
+                root.push(json::Node {
+                    mesh: Some(set.body),
+                    children: Some(vec![wing_l, wing_r]),
+                    translation: Some([0.0, 0.0, f[7]]),
+                    rotation: Some(json::scene::UnitQuaternion([f[8], f[9], f[10], f[11]])),
+                    scale: (f[12] != 1.0).then_some([f[12]; 3]),
+                    ..node(format!("{name}_body"))
+                });
+                root.push(json::Node {
+                    mesh: Some(set.wing_l),
+                    translation: Some(hinge(false)),
+                    rotation: Some(wing_pose(false)),
+                    ..node(format!("{name}_wing_l"))
+                });
+                root.push(json::Node {
+                    mesh: Some(set.wing_r),
+                    translation: Some(hinge(true)),
+                    rotation: Some(wing_pose(true)),
+                    ..node(format!("{name}_wing_r"))
+                });
+                children.push(bee);
+                track(&mut samplers, &mut channels, bee, bee_t, Translation);
+                track(&mut samplers, &mut channels, bee, bee_r, Rotation);
+                track(&mut samplers, &mut channels, body, body_t, Translation);
+                track(&mut samplers, &mut channels, body, body_r, Rotation);
+                if let Some(body_s) = body_s {
+                    track(&mut samplers, &mut channels, body, body_s, Scale);
+                }
+                if flapping {
+                    let (l, r) = wing_tracks[group].expect("a track for every group in use");
+                    track(&mut samplers, &mut channels, wing_l, l, Rotation);
+                    track(&mut samplers, &mut channels, wing_r, r, Rotation);
+                }
+            }
+            if !children.is_empty() {
+                root.nodes[swarm_root.value()].children = Some(children);
+            }
+        }
+        if !channels.is_empty() {
+            root.push(json::Animation {
+                name: Some(meta.shot_name.clone()),
+                channels,
+                samplers,
+                extensions: None,
+                extras: None,
+            });
+        }
+        let scene = root.push(json::Scene {
+            name: Some(meta.shot_name.clone()),
+            nodes: scene_nodes,
+            extensions: None,
+            extras: raw_extras(&info),
+        });
+        root.scene = Some(scene);
+        root.buffers[buffer.value()].byte_length = USize64(offset);
+        Layout {
+            root,
+            head,
+            total: offset,
+        }
+    }
+}
+
+/// Millimetres for a mesh name: `12` for 0.012 m, `11.5` for 0.0115 m.
+fn fmt_mm(m: f32) -> String {
+    let mm = (f64::from(m) * 1e4).round() / 10.0;
+    let s = format!("{mm}");
+    s.replace('.', "p")
+}
+
+/// Streams the binary buffer: the head, then every bee's tracks, transposed from the
+/// frame-major scratch file in blocks of bees so memory stays bounded.
+fn write_bin(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()> {
+    let dest = out.dest().to_path_buf();
+    let io = |e| Error::io(&dest, e);
+    let sio = |e| Error::io(&w.scratch.path, e);
+    out.write_all(&layout.head).map_err(io)?;
+    let mut written = layout.head.len() as u64;
+    let frames = w.meta.frame_count();
+    let bees = w.bee_count();
+    let mut scratch = File::open(&w.scratch.path).map_err(sio)?;
+    let block = (w.transpose_budget / (frames * RECORD_BYTES)).clamp(1, bees.max(1));
+    let mut buf = vec![0u8; block.min(bees) * frames * RECORD_BYTES];
+    let mut track = Vec::new();
+    let mut b0 = 0;
+    while b0 < bees {
+        let nb = block.min(bees - b0);
+        // buf[(f * nb + b) * RECORD_BYTES..] = record of bee b0 + b at frame f
+        for f in 0..frames {
+            let at = ((f * bees + b0) * RECORD_BYTES) as u64;
+            scratch.seek(SeekFrom::Start(at)).map_err(sio)?;
+            let dst = &mut buf[f * nb * RECORD_BYTES..(f + 1) * nb * RECORD_BYTES];
+            scratch.read_exact(dst).map_err(sio)?;
+        }
+        for b in 0..nb {
+            let rec = |f: usize| &buf[(f * nb + b) * RECORD_BYTES..(f * nb + b + 1) * RECORD_BYTES];
+            track.clear();
+            for f in 0..frames {
+                track.extend_from_slice(&rec(f)[0..12]); // bee translation
+            }
+            for f in 0..frames {
+                track.extend_from_slice(&rec(f)[12..28]); // bee rotation
+            }
+            for f in 0..frames {
+                track.extend_from_slice(&[0; 8]); // body translation (0, 0, sway)
+                track.extend_from_slice(&rec(f)[28..32]);
+            }
+            for f in 0..frames {
+                track.extend_from_slice(&rec(f)[32..48]); // body rotation
+            }
+            if w.bees[b0 + b].scale_varies {
+                for f in 0..frames {
+                    let s = &rec(f)[48..52];
+                    track.extend_from_slice(&[s, s, s].concat());
+                }
+            }
+            out.write_all(&track).map_err(io)?;
+            written += track.len() as u64;
+        }
+        b0 += nb;
+    }
+    if written != layout.total {
+        return Err(Error::bake(format!(
+            "glTF writer: wrote {written} buffer bytes, the layout has {}",
+            layout.total
+        )));
+    }
+    Ok(())
+}
+
+/// Counts bytes without storing them: the GLB header needs the JSON length up front, and
+/// serialising twice is cheaper than holding a large document's text.
+struct Counter(u64);
+
+impl Write for Counter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0 += buf.len() as u64;
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+fn write_glb(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()> {
+    let dest = out.dest().to_path_buf();
+    let io = |e| Error::io(&dest, e);
+    let json_err = |e: serde_json::Error| Error::bake(format!("glTF JSON: {e}"));
+    let mut counter = Counter(0);
+    layout.root.to_writer(&mut counter).map_err(json_err)?;
+    let json_len = counter.0;
+    let json_pad = (4 - json_len % 4) % 4;
+    let bin_pad = (4 - layout.total % 4) % 4;
+    let total = 12 + 8 + json_len + json_pad + 8 + layout.total + bin_pad;
+    let total = u32::try_from(total).map_err(|_| {
+        Error::bake(format!(
+            "the glTF cache would be {:.1} GiB, over the 4 GiB limit of a .glb: write \
+             `gltf` (separate .bin) or, better for this many bees, `usda`",
+            total as f64 / (1u64 << 30) as f64
+        ))
+    })?;
+    let mut header = Vec::with_capacity(20);
+    header.extend_from_slice(b"glTF");
+    header.extend_from_slice(&2u32.to_le_bytes());
+    header.extend_from_slice(&total.to_le_bytes());
+    header.extend_from_slice(&((json_len + json_pad) as u32).to_le_bytes());
+    header.extend_from_slice(b"JSON");
+    out.write_all(&header).map_err(io)?;
+    layout.root.to_writer(&mut *out).map_err(json_err)?;
+    // JSON chunks pad with spaces, binary chunks with zeros (GLB spec).
+    out.write_all(&b"   "[..json_pad as usize]).map_err(io)?;
+    out.write_all(&((layout.total + bin_pad) as u32).to_le_bytes())
+        .map_err(io)?;
+    out.write_all(b"BIN\0").map_err(io)?;
+    write_bin(w, layout, out)?;
+    out.write_all(&[0u8; 3][..bin_pad as usize]).map_err(io)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

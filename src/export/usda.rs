@@ -1,0 +1,1332 @@
+//! USDA cache: one `PointInstancer` per swarm, written as text without a USD library.
+//!
+//! Layout of `<name>.usda` (Y-up, metres, time codes = frame numbers):
+//!
+//! ```text
+//! /<Shot>                          Xform, defaultPrim, kind = "component"
+//!     /<swarm>                     PointInstancer: ids, protoIndices, prototypes, and
+//!                                  time-sampled positions, orientations (quath), scales,
+//!                                  velocities (m/s), angularVelocities (deg/s), extent,
+//!                                  primvars:pitch / roll / sway ("vertex": per instance)
+//!         /Prototypes/bee          Scope / Xform
+//!             /body, /wings        Mesh, real size in metres, body along +X
+//! ```
+//!
+//! USDA stores the time samples of one attribute as one block, but frames arrive one at a
+//! time with every attribute. To keep memory bounded, each frame's text of each
+//! (swarm, attribute) is appended to its own scratch file as the frame arrives, and
+//! `finish` concatenates the scratch files into the layer: memory holds one frame's text.
+//!
+//! With `usda_clip_frames > 0` the samples go to value clips instead: one layer per chunk
+//! of frames in `<name>.clips/`, plus a manifest, and the main layer holds only the
+//! static data and the clip metadata. Each clip also carries the first frame of the next
+//! chunk, so that sub-frame times at a chunk boundary (motion blur) interpolate exactly as
+//! they do in a single-file cache.
+//!
+//! Every file is committed only when the whole bake succeeded: a failed or interrupted
+//! bake leaves the previous cache in place and no temporary file behind.
+
+mod bee;
+mod text;
+
+use super::CacheWriter;
+use super::atomic::{AtomicFile, ScratchFile};
+use crate::error::{Error, Result};
+use crate::sim::{CacheMeta, Frame, SwarmFrame};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use text::{HalfFormatter, push_f32};
+
+/// Instances per formatting task. Large enough that a task outweighs its scheduling,
+/// small enough that one big swarm still spreads over every core.
+const PIECE: usize = 8192;
+
+/// The time-sampled attributes of each instancer, in the order they are written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Attr {
+    Positions,
+    Orientations,
+    Scales,
+    Velocities,
+    AngularVelocities,
+    Extent,
+    Pitch,
+    Roll,
+    Sway,
+}
+
+const ATTRS: [Attr; 9] = [
+    Attr::Positions,
+    Attr::Orientations,
+    Attr::Scales,
+    Attr::Velocities,
+    Attr::AngularVelocities,
+    Attr::Extent,
+    Attr::Pitch,
+    Attr::Roll,
+    Attr::Sway,
+];
+
+impl Attr {
+    /// Type and name, as declared in the layer.
+    fn decl(self) -> &'static str {
+        match self {
+            Attr::Positions => "point3f[] positions",
+            Attr::Orientations => "quath[] orientations",
+            Attr::Scales => "float3[] scales",
+            Attr::Velocities => "vector3f[] velocities",
+            Attr::AngularVelocities => "vector3f[] angularVelocities",
+            Attr::Extent => "float3[] extent",
+            Attr::Pitch => "float[] primvars:pitch",
+            Attr::Roll => "float[] primvars:roll",
+            Attr::Sway => "float[] primvars:sway",
+        }
+    }
+
+    fn name(self) -> &'static str {
+        self.decl().split(' ').nth(1).expect("type then name")
+    }
+
+    /// Our primvars are per instance. On a PointInstancer, "vertex" (like "varying")
+    /// assigns element i to instance i; "vertex" is what DCCs write and read back.
+    fn primvar_doc(self) -> Option<&'static str> {
+        match self {
+            Attr::Pitch => Some("Body pitch, degrees, nose up positive (about body +Z)."),
+            Attr::Roll => Some("Body roll, degrees, right wing down positive (about body +X)."),
+            Attr::Sway => {
+                Some("Lateral offset from the mean path, metres, along the heading's +Z.")
+            }
+            _ => None,
+        }
+    }
+
+    /// A generous text size of one instance, to size buffers once.
+    fn bytes_per_instance(self) -> usize {
+        match self {
+            Attr::Positions | Attr::Scales | Attr::Velocities | Attr::AngularVelocities => {
+                3 * 16 + 6
+            }
+            Attr::Orientations => 4 * 11 + 8,
+            Attr::Extent => 0,
+            Attr::Pitch | Attr::Roll | Attr::Sway => 16 + 2,
+        }
+    }
+}
+
+/// One formatting task: the text of instances `start..end` of one attribute of one swarm
+/// at the current frame, separators included, so pieces concatenate to the array's text
+/// whatever order the threads finish in.
+struct Piece {
+    swarm: usize,
+    attr: Attr,
+    start: usize,
+    end: usize,
+    text: Vec<u8>,
+    /// First instance whose value is not finite.
+    bad: Option<usize>,
+}
+
+impl Piece {
+    fn format(&mut self, s: &SwarmFrame, radius: f32, half: HalfFormatter) {
+        let out = &mut self.text;
+        out.clear();
+        self.bad = None;
+        let r = self.start..self.end;
+        let sep = |out: &mut Vec<u8>, i: usize| {
+            if i > 0 {
+                out.extend_from_slice(b", ");
+            }
+        };
+        let vec3s = |out: &mut Vec<u8>, vs: &[Vec3]| -> Option<usize> {
+            for (i, v) in r.clone().zip(vs) {
+                if !v.is_finite() {
+                    return Some(i);
+                }
+                sep(out, i);
+                push_vec3(out, *v);
+            }
+            None
+        };
+        let floats = |out: &mut Vec<u8>, vs: &[f32]| -> Option<usize> {
+            for (i, &v) in r.clone().zip(vs) {
+                if !v.is_finite() {
+                    return Some(i);
+                }
+                sep(out, i);
+                push_f32(out, v);
+            }
+            None
+        };
+        self.bad = match self.attr {
+            Attr::Positions => vec3s(out, &s.position[r.clone()]),
+            Attr::Velocities => vec3s(out, &s.velocity[r.clone()]),
+            Attr::AngularVelocities => vec3s(out, &s.angular_velocity_deg[r.clone()]),
+            Attr::Scales => {
+                let mut bad = None;
+                for (i, &v) in r.clone().zip(&s.scale[r.clone()]) {
+                    if !v.is_finite() {
+                        bad = Some(i);
+                        break;
+                    }
+                    sep(out, i);
+                    // Uniform: format the number once, copy it thrice.
+                    out.push(b'(');
+                    let at = out.len();
+                    push_f32(out, v);
+                    let end = out.len();
+                    for _ in 0..2 {
+                        out.extend_from_slice(b", ");
+                        out.extend_from_within(at..end);
+                    }
+                    out.push(b')');
+                }
+                bad
+            }
+            Attr::Orientations => {
+                let mut bad = None;
+                for (i, q) in r.clone().zip(&s.orientation[r.clone()]) {
+                    if !q.is_finite() {
+                        bad = Some(i);
+                        break;
+                    }
+                    sep(out, i);
+                    // USDA writes quaternions real part first: (w, x, y, z).
+                    out.push(b'(');
+                    half.push(out, q.w);
+                    out.extend_from_slice(b", ");
+                    half.push(out, q.x);
+                    out.extend_from_slice(b", ");
+                    half.push(out, q.y);
+                    out.extend_from_slice(b", ");
+                    half.push(out, q.z);
+                    out.push(b')');
+                }
+                bad
+            }
+            Attr::Pitch => floats(out, &s.pitch_deg[r.clone()]),
+            Attr::Roll => floats(out, &s.roll_deg[r.clone()]),
+            Attr::Sway => floats(out, &s.sway_m[r.clone()]),
+            Attr::Extent => {
+                // A bound of every instance under any rotation: the prototype's bound
+                // radius times the instance's scale around its position. Conservative,
+                // cheap, and it contains the box USD computes from the prototypes.
+                let mut lo = Vec3::ZERO;
+                let mut hi = Vec3::ZERO;
+                let mut bad = None;
+                for (i, (p, sc)) in s.position.iter().zip(&s.scale).enumerate() {
+                    let reach = Vec3::splat(radius * sc.abs());
+                    let (a, b) = (*p - reach, *p + reach);
+                    if !(a.is_finite() && b.is_finite()) {
+                        bad = Some(i);
+                        break;
+                    }
+                    (lo, hi) = if i == 0 {
+                        (a, b)
+                    } else {
+                        (lo.min(a), hi.max(b))
+                    };
+                }
+                push_vec3(out, lo);
+                out.extend_from_slice(b", ");
+                push_vec3(out, hi);
+                bad
+            }
+        };
+    }
+}
+
+#[inline]
+fn push_vec3(out: &mut Vec<u8>, v: Vec3) {
+    out.push(b'(');
+    push_f32(out, v.x);
+    out.extend_from_slice(b", ");
+    push_f32(out, v.y);
+    out.extend_from_slice(b", ");
+    push_f32(out, v.z);
+    out.push(b')');
+}
+
+/// The scratch file collecting one (swarm, attribute)'s sample lines for one chunk.
+struct Spill {
+    scratch: ScratchFile,
+    w: BufWriter<File>,
+}
+
+/// The samples of the frames `start..` not yet written into a layer.
+struct Chunk {
+    start: i32,
+    /// Index `swarm * ATTRS.len() + attribute`.
+    spills: Vec<Spill>,
+}
+
+/// A finished clip layer, complete and closed, waiting for the bake to succeed.
+struct PendingClip {
+    scratch: ScratchFile,
+    dest: PathBuf,
+    start: i32,
+}
+
+pub struct UsdaWriter {
+    meta: CacheMeta,
+    dest: PathBuf,
+    /// Where scratch files go: beside the destination, so nothing crosses filesystems.
+    dir: PathBuf,
+    root: String,
+    /// Frames per value clip, 0 = one file.
+    clip_frames: usize,
+    clips_dir: PathBuf,
+    created_clips_dir: bool,
+    /// Per swarm: the ids of the first frame (they must not change) and the bound radius
+    /// of one prototype at scale 1.
+    ids: Vec<Vec<u64>>,
+    radius: Vec<f32>,
+    pieces: Vec<Piece>,
+    half: HalfFormatter,
+    next_frame: i32,
+    chunk: Option<Chunk>,
+    clips: Vec<PendingClip>,
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |e| Error::io(path, e)
+}
+
+impl UsdaWriter {
+    pub fn create(path: &Path, meta: &CacheMeta, clip_frames: u32) -> Result<Self> {
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        let radius = meta
+            .swarms
+            .iter()
+            .map(|s| bee::bound_radius(s.bee_length_m))
+            .collect();
+        let clips_dir = dir.join(format!("{}.clips", meta.shot_name));
+        let mut created_clips_dir = false;
+        if clip_frames > 0 && !clips_dir.is_dir() {
+            std::fs::create_dir_all(&clips_dir).map_err(io(&clips_dir))?;
+            created_clips_dir = true;
+        }
+        Ok(UsdaWriter {
+            meta: meta.clone(),
+            dest: path.to_path_buf(),
+            dir,
+            root: text::prim_name(&meta.shot_name),
+            clip_frames: clip_frames as usize,
+            clips_dir,
+            created_clips_dir,
+            ids: Vec::new(),
+            radius,
+            pieces: Vec::new(),
+            half: HalfFormatter::new(),
+            next_frame: meta.frame_start,
+            chunk: None,
+            clips: Vec::new(),
+        })
+    }
+
+    /// Checks a frame against the contract: in order, every swarm present with its
+    /// constant count and ids, every per-bee vector of that length.
+    fn check(&mut self, frame: &Frame) -> Result<()> {
+        if frame.frame != self.next_frame || frame.frame > self.meta.frame_end {
+            return Err(Error::bake(format!(
+                "USDA writer: got frame {} where frame {} was expected (range {}-{})",
+                frame.frame, self.next_frame, self.meta.frame_start, self.meta.frame_end
+            )));
+        }
+        if frame.swarms.len() != self.meta.swarms.len() {
+            return Err(Error::bake(format!(
+                "USDA writer: frame {} has {} swarms, the shot has {}",
+                frame.frame,
+                frame.swarms.len(),
+                self.meta.swarms.len()
+            )));
+        }
+        for (k, (s, m)) in frame.swarms.iter().zip(&self.meta.swarms).enumerate() {
+            let n = s.ids.len();
+            let lens = [
+                s.position.len(),
+                s.velocity.len(),
+                s.orientation.len(),
+                s.pitch_deg.len(),
+                s.roll_deg.len(),
+                s.sway_m.len(),
+                s.angular_velocity_deg.len(),
+                s.scale.len(),
+            ];
+            if n != m.count || lens.iter().any(|&l| l != n) {
+                return Err(Error::bake(format!(
+                    "USDA writer: swarm \"{}\" at frame {} has {n} ids and per-bee arrays of \
+                     {lens:?}; expected {} bees (instance count is constant through a shot)",
+                    m.name, frame.frame, m.count
+                )));
+            }
+            match self.ids.get(k) {
+                None => self.ids.push(s.ids.clone()),
+                Some(first) if *first != s.ids => {
+                    return Err(Error::bake(format!(
+                        "USDA writer: swarm \"{}\" changed its bee ids or their order at frame {}",
+                        m.name, frame.frame
+                    )));
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// The formatting tasks, fixed for the shot since counts are constant.
+    fn plan_pieces(&mut self) {
+        for (k, m) in self.meta.swarms.iter().enumerate() {
+            for attr in ATTRS {
+                let ranges: Vec<(usize, usize)> = if attr == Attr::Extent || m.count == 0 {
+                    vec![(0, m.count)]
+                } else {
+                    (0..m.count)
+                        .step_by(PIECE)
+                        .map(|a| (a, (a + PIECE).min(m.count)))
+                        .collect()
+                };
+                for (start, end) in ranges {
+                    self.pieces.push(Piece {
+                        swarm: k,
+                        attr,
+                        start,
+                        end,
+                        text: Vec::with_capacity((end - start) * attr.bytes_per_instance() + 128),
+                        bad: None,
+                    });
+                }
+            }
+        }
+    }
+
+    fn new_chunk(&self, start: i32) -> Result<Chunk> {
+        let mut spills = Vec::new();
+        for m in &self.meta.swarms {
+            for attr in ATTRS {
+                let scratch = ScratchFile::new(
+                    &self.dir,
+                    &format!("usda.{}.{}", m.name, attr.name().replace(':', "_")),
+                );
+                let f = File::create(&scratch.path).map_err(io(&scratch.path))?;
+                spills.push(Spill {
+                    // Smaller than a full piece (8,192 instances of text), which then goes
+                    // straight to the file instead of being copied through the buffer.
+                    w: BufWriter::with_capacity(64 << 10, f),
+                    scratch,
+                });
+            }
+        }
+        Ok(Chunk { start, spills })
+    }
+
+    /// Appends the formatted frame to a chunk's scratch files.
+    fn spill(pieces: &[Piece], frame: i32, chunk: &mut Chunk) -> Result<()> {
+        let mut head = Vec::with_capacity(32);
+        head.extend_from_slice(b"            ");
+        head.extend_from_slice(itoa::Buffer::new().format(frame).as_bytes());
+        head.extend_from_slice(b": [");
+        // Pieces are ordered by (swarm, attribute) like the spills, one group per spill;
+        // each spill is its own file, so they are written in parallel.
+        let groups: Vec<&[Piece]> = pieces
+            .chunk_by(|a, b| a.swarm == b.swarm && a.attr == b.attr)
+            .collect();
+        debug_assert_eq!(groups.len(), chunk.spills.len());
+        chunk
+            .spills
+            .par_iter_mut()
+            .zip(groups)
+            .try_for_each(|(spill, group)| {
+                let path = &spill.scratch.path;
+                spill.w.write_all(&head).map_err(io(path))?;
+                for p in group {
+                    spill.w.write_all(&p.text).map_err(io(path))?;
+                }
+                spill.w.write_all(b"],\n").map_err(io(path))
+            })
+    }
+
+    /// Writes one swarm's time-sample blocks from a chunk's scratch files.
+    fn copy_samples(
+        &self,
+        chunk: &mut Chunk,
+        swarm: usize,
+        out: &mut BufWriter<File>,
+        out_path: &Path,
+    ) -> Result<()> {
+        for (a, attr) in ATTRS.iter().enumerate() {
+            let spill = &mut chunk.spills[swarm * ATTRS.len() + a];
+            spill.w.flush().map_err(io(&spill.scratch.path))?;
+            let mut src = File::open(&spill.scratch.path).map_err(io(&spill.scratch.path))?;
+            writeln!(out, "        {}.timeSamples = {{", attr.decl()).map_err(io(out_path))?;
+            std::io::copy(&mut src, out).map_err(io(out_path))?;
+            out.write_all(b"        }\n").map_err(io(out_path))?;
+        }
+        Ok(())
+    }
+
+    fn clip_dest(&self, index: usize, count: usize) -> PathBuf {
+        self.clips_dir
+            .join(clip_file_name(&self.meta.shot_name, index, count))
+    }
+
+    /// Writes the current chunk as a complete clip layer, left uncommitted.
+    fn close_chunk(&mut self, mut chunk: Chunk) -> Result<()> {
+        let index = self.clips.len();
+        let count = self.clip_count();
+        let dest = self.clip_dest(index, count);
+        let scratch = ScratchFile::new(&self.clips_dir, "usda.clip");
+        let path = scratch.path.clone();
+        let mut out = BufWriter::with_capacity(1 << 20, File::create(&path).map_err(io(&path))?);
+        let last = (chunk.start + self.clip_frames as i32).min(self.meta.frame_end);
+        let mut head = String::new();
+        let _ = write!(
+            head,
+            "#usda 1.0\n(\n    doc = {}\n)\n\nover \"{}\"\n{{\n",
+            text::quoted(&format!(
+                "Value clip {} of {count} of shot \"{}\": frames {}-{last}. Written by beeswarm {}.",
+                index + 1,
+                self.meta.shot_name,
+                chunk.start,
+                self.meta.tool_version
+            )),
+            self.root
+        );
+        out.write_all(head.as_bytes()).map_err(io(&path))?;
+        for (k, m) in self.meta.swarms.iter().enumerate() {
+            write!(out, "    over \"{}\"\n    {{\n", m.name).map_err(io(&path))?;
+            self.copy_samples(&mut chunk, k, &mut out, &path)?;
+            out.write_all(b"    }\n").map_err(io(&path))?;
+        }
+        out.write_all(b"}\n\n").map_err(io(&path))?;
+        let file = out
+            .into_inner()
+            .map_err(|e| Error::io(&path, e.into_error()))?;
+        file.sync_all().map_err(io(&path))?;
+        self.clips.push(PendingClip {
+            scratch,
+            dest,
+            start: chunk.start,
+        });
+        Ok(())
+    }
+
+    fn clip_count(&self) -> usize {
+        self.meta.frame_count().div_ceil(self.clip_frames.max(1))
+    }
+
+    /// The layer header: stage metadata and what made the cache.
+    fn header(&self) -> String {
+        let m = &self.meta;
+        let fps = text::f64_text(m.fps);
+        format!(
+            "#usda 1.0\n(\n    customLayerData = {{\n        uint64 seed = {}\n        string shotName = {}\n        \
+             string toolVersion = {}\n    }}\n    defaultPrim = \"{}\"\n    doc = {}\n    endTimeCode = {}\n    \
+             framesPerSecond = {fps}\n    metersPerUnit = 1\n    startTimeCode = {}\n    timeCodesPerSecond = {fps}\n    \
+             upAxis = \"Y\"\n)\n\n",
+            m.seed,
+            text::quoted(&m.shot_name),
+            text::quoted(&m.tool_version),
+            self.root,
+            text::quoted(
+                "Honeybee swarm cache: one PointInstancer per swarm. Metres, seconds, Y up."
+            ),
+            m.frame_end,
+            m.frame_start,
+        )
+    }
+
+    /// Static instancer data: ids, prototype indices, the prototype relationship.
+    fn write_static(&self, swarm: usize, out: &mut BufWriter<File>, path: &Path) -> Result<()> {
+        let m = &self.meta.swarms[swarm];
+        let mut t = Vec::with_capacity(m.count * 12 + 256);
+        let mut ib = itoa::Buffer::new();
+        t.extend_from_slice(b"        int64[] ids = [");
+        for (i, id) in self.ids[swarm].iter().enumerate() {
+            if i > 0 {
+                t.extend_from_slice(b", ");
+            }
+            // Shot ids fit int64 by construction; a u64 above i64::MAX would be written as
+            // its int64 bit pattern, which is what USD would read back from binary.
+            t.extend_from_slice(ib.format(*id as i64).as_bytes());
+        }
+        t.extend_from_slice(b"]\n        int[] protoIndices = [");
+        for i in 0..m.count {
+            t.extend_from_slice(if i > 0 { b", 0" } else { b"0" });
+        }
+        t.extend_from_slice(b"]\n");
+        let _ = writeln!(
+            Wrap(&mut t),
+            "        rel prototypes = </{}/{}/Prototypes/bee>",
+            self.root,
+            m.name
+        );
+        out.write_all(&t).map_err(io(path))
+    }
+
+    /// The prototype subtree of one instancer.
+    fn prototypes(&self, swarm: usize) -> String {
+        let m = &self.meta.swarms[swarm];
+        let mut s = String::new();
+        s.push_str("\n        def Scope \"Prototypes\"\n        {\n            def Xform \"bee\"\n            {\n");
+        let body = bee::body(m.bee_length_m);
+        let wings = bee::wings(m.bee_length_m);
+        mesh_text(&mut s, "body", &body, "(0.55, 0.36, 0.08)", None);
+        s.push('\n');
+        mesh_text(&mut s, "wings", &wings, "(0.86, 0.88, 0.9)", Some("0.35"));
+        s.push_str("            }\n        }\n");
+        s
+    }
+
+    /// Instancer opening line with its metadata.
+    fn instancer_open(&self, swarm: usize) -> String {
+        let m = &self.meta.swarms[swarm];
+        format!(
+            "    def PointInstancer \"{}\" (\n        customData = {{\n            float beeLength = {}\n            \
+             float wingBeatHz = {}\n        }}\n    )\n    {{\n",
+            m.name,
+            f32_text(m.bee_length_m),
+            f32_text(m.wing_beat_hz)
+        )
+    }
+
+    fn finish_single(mut self) -> Result<Vec<PathBuf>> {
+        let mut chunk = self.chunk.take().expect("at least one frame was written");
+        let mut file = AtomicFile::create(&self.dest)?;
+        let path = self.dest.clone();
+        let mut head = self.header();
+        let _ = write!(
+            head,
+            "def Xform \"{}\" (\n    kind = \"component\"\n)\n{{\n",
+            self.root
+        );
+        file.writer()
+            .write_all(head.as_bytes())
+            .map_err(io(&path))?;
+        for k in 0..self.meta.swarms.len() {
+            let out = file.writer();
+            out.write_all(self.instancer_open(k).as_bytes())
+                .map_err(io(&path))?;
+            self.write_static(k, out, &path)?;
+            for attr in ATTRS {
+                if let Some(doc) = attr.primvar_doc() {
+                    write!(
+                        out,
+                        "        {} (\n{}        )\n",
+                        attr.decl(),
+                        primvar_meta(doc)
+                    )
+                    .map_err(io(&path))?;
+                }
+            }
+            self.copy_samples(&mut chunk, k, out, &path)?;
+            out.write_all(self.prototypes(k).as_bytes())
+                .map_err(io(&path))?;
+            out.write_all(b"    }\n").map_err(io(&path))?;
+        }
+        file.writer().write_all(b"}\n\n").map_err(io(&path))?;
+        drop(chunk);
+        let main = file.commit()?;
+        // A previous bake of this shot in clips mode left clip layers that nothing
+        // references any more.
+        remove_stale_clips(&self.clips_dir, &self.meta.shot_name, &[]);
+        Ok(vec![main])
+    }
+
+    fn finish_clips(mut self) -> Result<Vec<PathBuf>> {
+        let chunk = self.chunk.take().expect("at least one frame was written");
+        self.close_chunk(chunk)?;
+        let manifest_dest = self
+            .clips_dir
+            .join(format!("{}.manifest.usda", self.meta.shot_name));
+        let rel = |p: &Path| {
+            format!(
+                "@./{}.clips/{}@",
+                self.meta.shot_name,
+                p.file_name().expect("clip file name").to_string_lossy()
+            )
+        };
+
+        // Manifest: every attribute that has samples in the clips, typed, without values.
+        // It spares USD from opening every clip to learn what they contain.
+        let mut manifest = AtomicFile::create(&manifest_dest)?;
+        let mut t = format!(
+            "#usda 1.0\n(\n    doc = {}\n)\n\nover \"{}\"\n{{\n",
+            text::quoted("Value clip manifest: the attributes the clips hold samples for."),
+            self.root
+        );
+        for m in &self.meta.swarms {
+            let _ = write!(t, "    over \"{}\"\n    {{\n", m.name);
+            for attr in ATTRS {
+                let _ = writeln!(t, "        {}", attr.decl());
+            }
+            t.push_str("    }\n");
+        }
+        t.push_str("}\n\n");
+        manifest
+            .write_all(t.as_bytes())
+            .map_err(io(&manifest_dest))?;
+
+        let mut main = AtomicFile::create(&self.dest)?;
+        let path = self.dest.clone();
+        let mut t = self.header();
+        let _ = write!(
+            t,
+            "def Xform \"{}\" (\n    clips = {{\n        dictionary default = {{\n",
+            self.root
+        );
+        t.push_str("            double2[] active = [");
+        for (i, c) in self.clips.iter().enumerate() {
+            let _ = write!(t, "{}({}, {i})", if i > 0 { ", " } else { "" }, c.start);
+        }
+        t.push_str("]\n            asset[] assetPaths = [");
+        for (i, c) in self.clips.iter().enumerate() {
+            let _ = write!(t, "{}{}", if i > 0 { ", " } else { "" }, rel(&c.dest));
+        }
+        let (a, b) = (self.meta.frame_start, self.meta.frame_end);
+        // Clip time = stage time: the clips hold samples at the frame numbers themselves.
+        let times = if a == b {
+            format!("({a}, {a})")
+        } else {
+            format!("({a}, {a}), ({b}, {b})")
+        };
+        let _ = write!(
+            t,
+            "]\n            asset manifestAssetPath = {}\n            string primPath = \"/{}\"\n            \
+             double2[] times = [{times}]\n        }}\n    }}\n    kind = \"component\"\n)\n{{\n",
+            rel(&manifest_dest),
+            self.root
+        );
+        main.write_all(t.as_bytes()).map_err(io(&path))?;
+        for k in 0..self.meta.swarms.len() {
+            let out = main.writer();
+            out.write_all(self.instancer_open(k).as_bytes())
+                .map_err(io(&path))?;
+            self.write_static(k, out, &path)?;
+            // Declared here so the composed stage knows their types; values come from
+            // the clips.
+            for attr in ATTRS {
+                match attr.primvar_doc() {
+                    Some(doc) => write!(
+                        out,
+                        "        {} (\n{}        )\n",
+                        attr.decl(),
+                        primvar_meta(doc)
+                    ),
+                    None => writeln!(out, "        {}", attr.decl()),
+                }
+                .map_err(io(&path))?;
+            }
+            out.write_all(self.prototypes(k).as_bytes())
+                .map_err(io(&path))?;
+            out.write_all(b"    }\n").map_err(io(&path))?;
+        }
+        main.writer().write_all(b"}\n\n").map_err(io(&path))?;
+
+        // Commit the layers the main one depends on first, so that the main layer never
+        // names a clip that is not in place.
+        let mut written = Vec::new();
+        for c in std::mem::take(&mut self.clips) {
+            std::fs::rename(&c.scratch.path, &c.dest).map_err(io(&c.dest))?;
+            written.push(c.dest);
+        }
+        let manifest = manifest.commit()?;
+        let main = main.commit()?;
+        remove_stale_clips(&self.clips_dir, &self.meta.shot_name, &written);
+        let mut out = vec![main, manifest];
+        out.extend(written);
+        Ok(out)
+    }
+}
+
+/// `std::fmt::Write` over a byte buffer.
+struct Wrap<'a>(&'a mut Vec<u8>);
+
+impl std::fmt::Write for Wrap<'_> {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.extend_from_slice(s.as_bytes());
+        Ok(())
+    }
+}
+
+fn f32_text(v: f32) -> String {
+    let mut out = Vec::new();
+    push_f32(&mut out, v);
+    String::from_utf8(out).expect("ryu writes ASCII")
+}
+
+fn primvar_meta(doc: &str) -> String {
+    format!(
+        "            doc = {}\n            interpolation = \"vertex\"\n",
+        text::quoted(doc)
+    )
+}
+
+fn clip_file_name(shot: &str, index: usize, count: usize) -> String {
+    let width = count.to_string().len().max(4);
+    format!("{shot}.{:0width$}.usda", index + 1)
+}
+
+/// Removes clip layers of an earlier bake of this shot that the new cache does not use:
+/// only files named exactly as this writer names them, and the folder if then empty.
+fn remove_stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) {
+    let Ok(entries) = std::fs::read_dir(clips_dir) else {
+        return;
+    };
+    let prefix = format!("{shot}.");
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(middle) = name
+            .strip_prefix(&prefix)
+            .and_then(|r| r.strip_suffix(".usda"))
+        else {
+            continue;
+        };
+        let path = e.path();
+        // The manifest goes with clips mode as a whole; clip layers one by one.
+        let stale = if middle == "manifest" {
+            keep.is_empty()
+        } else {
+            !middle.is_empty()
+                && middle.bytes().all(|b| b.is_ascii_digit())
+                && !keep.contains(&path)
+        };
+        if stale {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+    let _ = std::fs::remove_dir(clips_dir); // only succeeds when empty
+}
+
+/// One mesh prim of the prototype.
+fn mesh_text(s: &mut String, name: &str, m: &bee::Mesh, color: &str, opacity: Option<&str>) {
+    let ind = "                    ";
+    let vec3_list = |vs: &[Vec3]| {
+        let mut t = Vec::new();
+        for (i, v) in vs.iter().enumerate() {
+            if i > 0 {
+                t.extend_from_slice(b", ");
+            }
+            push_vec3(&mut t, *v);
+        }
+        String::from_utf8(t).expect("ASCII")
+    };
+    let ints = |vs: &[i32]| {
+        vs.iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = writeln!(s, "{}def Mesh \"{name}\"\n{}{{", &ind[4..], &ind[4..]);
+    if opacity.is_some() {
+        // Wings are single sheets.
+        let _ = writeln!(s, "{ind}uniform bool doubleSided = 1");
+    }
+    let _ = writeln!(s, "{ind}float3[] extent = [{}]", vec3_list(&m.extent()));
+    let _ = writeln!(
+        s,
+        "{ind}int[] faceVertexCounts = [{}]",
+        ints(&m.face_counts)
+    );
+    let _ = writeln!(
+        s,
+        "{ind}int[] faceVertexIndices = [{}]",
+        ints(&m.face_indices)
+    );
+    let _ = writeln!(s, "{ind}point3f[] points = [{}]", vec3_list(&m.points));
+    let _ = writeln!(
+        s,
+        "{ind}color3f[] primvars:displayColor = [{color}] (\n{ind}    interpolation = \"constant\"\n{ind})"
+    );
+    if let Some(o) = opacity {
+        let _ = writeln!(
+            s,
+            "{ind}float[] primvars:displayOpacity = [{o}] (\n{ind}    interpolation = \"constant\"\n{ind})"
+        );
+    }
+    // Low-poly on purpose: rendered as is, not subdivided.
+    let _ = writeln!(s, "{ind}uniform token subdivisionScheme = \"none\"");
+    let _ = writeln!(s, "{}}}", &ind[4..]);
+}
+
+impl CacheWriter for UsdaWriter {
+    fn write_frame(&mut self, frame: &Frame) -> Result<()> {
+        self.check(frame)?;
+        if self.pieces.is_empty() {
+            self.plan_pieces();
+        }
+        let (radius, half) = (&self.radius, self.half);
+        self.pieces
+            .par_iter_mut()
+            .for_each(|p| p.format(&frame.swarms[p.swarm], radius[p.swarm], half));
+        if let Some(p) = self.pieces.iter().find(|p| p.bad.is_some()) {
+            let i = p.bad.expect("found a bad piece");
+            return Err(Error::bake(format!(
+                "USDA writer: swarm \"{}\", bee {}: {} is not finite at frame {}",
+                self.meta.swarms[p.swarm].name,
+                frame.swarms[p.swarm].ids[i],
+                if p.attr == Attr::Extent {
+                    "position"
+                } else {
+                    p.attr.name()
+                },
+                frame.frame
+            )));
+        }
+
+        let f = frame.frame;
+        match self.chunk.take() {
+            None => self.chunk = Some(self.new_chunk(f)?),
+            Some(mut c) if self.clip_frames > 0 && f == c.start + self.clip_frames as i32 => {
+                // The first frame of the next clip ends the previous one too (see the
+                // module comment on sub-frame interpolation at a boundary).
+                Self::spill(&self.pieces, f, &mut c)?;
+                self.close_chunk(c)?;
+                self.chunk = Some(self.new_chunk(f)?);
+            }
+            Some(c) => self.chunk = Some(c),
+        }
+        Self::spill(&self.pieces, f, self.chunk.as_mut().expect("chunk open"))?;
+        self.next_frame += 1;
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>> {
+        if self.next_frame != self.meta.frame_end + 1 {
+            return Err(Error::bake(format!(
+                "USDA writer: finished after frame {} of {}-{}",
+                self.next_frame - 1,
+                self.meta.frame_start,
+                self.meta.frame_end
+            )));
+        }
+        if self.clip_frames > 0 {
+            self.finish_clips()
+        } else {
+            self.finish_single()
+        }
+    }
+}
+
+impl Drop for UsdaWriter {
+    fn drop(&mut self) {
+        // Scratch files and uncommitted clips delete themselves; remove the clip folder
+        // too if this writer made it and nothing was committed into it.
+        self.chunk = None;
+        self.clips.clear();
+        if self.created_clips_dir {
+            let _ = std::fs::remove_dir(&self.clips_dir);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::SwarmMeta;
+    use glam::Quat;
+
+    fn meta(counts: &[usize], frames: (i32, i32)) -> CacheMeta {
+        CacheMeta {
+            shot_name: "test-shot".into(),
+            fps: 24.0,
+            frame_start: frames.0,
+            frame_end: frames.1,
+            seed: 7,
+            tool_version: "0.1.0".into(),
+            swarms: counts
+                .iter()
+                .enumerate()
+                .map(|(k, &count)| SwarmMeta {
+                    name: format!("swarm{k}"),
+                    count,
+                    bee_length_m: 0.012,
+                    wing_beat_hz: 230.0,
+                })
+                .collect(),
+        }
+    }
+
+    /// Deterministic, varied values: negative, tiny, integral, zero.
+    fn swarm_frame(count: usize, frame: i32, first_id: u64) -> SwarmFrame {
+        let t = frame as f32 * 0.1;
+        let mut s = SwarmFrame::default();
+        for i in 0..count {
+            let a = i as f32 * 0.37 + t;
+            s.ids.push(first_id + i as u64);
+            s.position
+                .push(Vec3::new(a.sin(), 1.0 + 0.25 * i as f32, -a.cos() * 1e-3));
+            s.velocity.push(Vec3::new(a.cos(), 0.0, -2.5));
+            let q = Quat::from_rotation_y(a) * Quat::from_rotation_z(0.3 * a.sin());
+            s.orientation.push(q);
+            s.heading.push(Quat::from_rotation_y(a));
+            s.pitch_deg.push(17.19 * a.sin());
+            s.roll_deg.push(-3.0);
+            s.sway_m.push(1e-7 * i as f32);
+            s.angular_velocity_deg.push(Vec3::new(0.0, 57.3, 1.5));
+            s.scale.push(1.0 + 0.01 * i as f32);
+        }
+        s
+    }
+
+    fn bake(dir: &Path, m: &CacheMeta, clip_frames: u32) -> Result<Vec<PathBuf>> {
+        let path = dir.join(format!("{}.usda", m.shot_name));
+        let mut w: Box<dyn CacheWriter> = Box::new(UsdaWriter::create(&path, m, clip_frames)?);
+        for f in m.frame_start..=m.frame_end {
+            let mut first = 100;
+            let swarms: Vec<SwarmFrame> = m
+                .swarms
+                .iter()
+                .map(|s| {
+                    first += 1000;
+                    swarm_frame(s.count, f, first)
+                })
+                .collect();
+            w.write_frame(&Frame {
+                frame: f,
+                time: (f - m.frame_start) as f64 / m.fps,
+                swarms: &swarms,
+            })?;
+        }
+        w.finish()
+    }
+
+    fn files(dir: &Path) -> Vec<String> {
+        let mut out = Vec::new();
+        for e in walk(dir) {
+            out.push(e.strip_prefix(dir).unwrap().to_string_lossy().into_owned());
+        }
+        out.sort();
+        out
+    }
+
+    fn walk(dir: &Path) -> Vec<PathBuf> {
+        let mut out = Vec::new();
+        for e in std::fs::read_dir(dir).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.push(p.clone());
+                out.extend(walk(&p));
+            } else {
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn single_file_layout_and_metadata() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[3, 2], (1, 4));
+        let out = bake(dir.path(), &m, 0).unwrap();
+        assert_eq!(out, vec![dir.path().join("test-shot.usda")]);
+        assert_eq!(
+            files(dir.path()),
+            vec!["test-shot.usda"],
+            "no scratch file left"
+        );
+        let t = std::fs::read_to_string(&out[0]).unwrap();
+        for needle in [
+            "#usda 1.0\n(\n",
+            "defaultPrim = \"test_shot\"",
+            "upAxis = \"Y\"",
+            "metersPerUnit = 1\n",
+            "startTimeCode = 1\n",
+            "endTimeCode = 4\n",
+            "timeCodesPerSecond = 24\n",
+            "framesPerSecond = 24\n",
+            "uint64 seed = 7",
+            "string shotName = \"test-shot\"",
+            "string toolVersion = \"0.1.0\"",
+            "def Xform \"test_shot\"",
+            "def PointInstancer \"swarm0\"",
+            "def PointInstancer \"swarm1\"",
+            "int64[] ids = [1100, 1101, 1102]\n",
+            "int64[] ids = [2100, 2101]\n",
+            "int[] protoIndices = [0, 0, 0]\n",
+            "rel prototypes = </test_shot/swarm0/Prototypes/bee>",
+            "float[] primvars:pitch (\n",
+            "interpolation = \"vertex\"",
+            "def Mesh \"body\"",
+            "def Mesh \"wings\"",
+        ] {
+            assert!(t.contains(needle), "missing {needle:?}");
+        }
+        for attr in ATTRS {
+            let block = format!("        {}.timeSamples = {{\n            1: [", attr.decl());
+            assert_eq!(
+                t.matches(&block).count(),
+                2,
+                "{attr:?}: one block per swarm"
+            );
+        }
+        // Frame 1 of swarm 0, bee 0: a = 0.1, exact shortest text of each value.
+        let s = swarm_frame(3, 1, 1100);
+        let mut expect = b"            1: [".to_vec();
+        push_vec3(&mut expect, s.position[0]);
+        assert!(t.contains(std::str::from_utf8(&expect).unwrap()));
+        assert!(t.contains("            4: [(0, 57.3, 1.5), (0, 57.3, 1.5), (0, 57.3, 1.5)],\n"));
+        assert!(
+            t.contains("            2: [-3, -3, -3],\n"),
+            "integral floats have no .0"
+        );
+        assert!(
+            t.contains("            1: [0, 1e-7, 2e-7],\n"),
+            "sway: shortest, exponent form"
+        );
+        assert!(
+            t.contains("            3: [(1, 1, 1), (1.01, 1.01, 1.01), (1.02, 1.02, 1.02)],\n")
+        );
+        assert!(
+            !t.contains("NaN") && !t.contains("inf") && !t.contains("-0,") && !t.contains(".0,")
+        );
+        // Four samples per block, in frame order.
+        let pos = t.find("point3f[] positions.timeSamples").unwrap();
+        let block = &t[pos..pos + t[pos..].find("        }\n").unwrap()];
+        let frames: Vec<&str> = block
+            .lines()
+            .skip(1)
+            .map(|l| l.trim().split(':').next().unwrap())
+            .collect();
+        assert_eq!(frames, ["1", "2", "3", "4"]);
+    }
+
+    #[test]
+    fn orientations_are_real_first_halves() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[2], (0, 0));
+        let path = dir.path().join("q.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let mut s = swarm_frame(2, 0, 1);
+        s.orientation = vec![
+            Quat::IDENTITY,
+            Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+        ];
+        w.write_frame(&Frame {
+            frame: 0,
+            time: 0.0,
+            swarms: std::slice::from_ref(&s),
+        })
+        .unwrap();
+        Box::new(w).finish().unwrap();
+        let t = std::fs::read_to_string(&path).unwrap();
+        // (w, x, y, z): identity, then 90° about +Y = (0.7071, 0, 0.7071, 0) in half.
+        assert!(t.contains("quath[] orientations.timeSamples = {\n            0: [(1, 0, 0, 0), (0.707, 0, 0.707, 0)],\n"));
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_with_the_bee_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[3], (1, 1));
+        let path = dir.path().join("n.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let mut s = swarm_frame(3, 1, 40);
+        s.velocity[2].y = f32::NAN;
+        let e = w
+            .write_frame(&Frame {
+                frame: 1,
+                time: 0.0,
+                swarms: std::slice::from_ref(&s),
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bee 42") && e.contains("velocities"), "{e}");
+        drop(w);
+        assert!(files(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn contract_violations_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[2], (1, 3));
+        let path = dir.path().join("c.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let s = swarm_frame(2, 1, 0);
+        let frame = |f, s: &SwarmFrame| -> Result<()> {
+            let swarms = [s.clone()];
+            let fr = Frame {
+                frame: f,
+                time: 0.0,
+                swarms: &swarms,
+            };
+            w.write_frame(&fr)
+        };
+        let mut frame = frame;
+        assert!(frame(2, &s).is_err(), "out of order");
+        frame(1, &s).unwrap();
+        let mut swapped = swarm_frame(2, 2, 0);
+        swapped.ids.swap(0, 1);
+        assert!(frame(2, &swapped).is_err(), "ids reordered");
+        assert!(frame(2, &swarm_frame(3, 2, 0)).is_err(), "count changed");
+        frame(2, &swarm_frame(2, 2, 0)).unwrap();
+        assert!(Box::new(w).finish().is_err(), "frame 3 never came");
+        assert!(files(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn dropped_writer_keeps_the_previous_cache_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[4], (1, 6));
+        bake(dir.path(), &m, 2).unwrap();
+        bake(dir.path(), &m, 0).unwrap();
+        let before: Vec<(String, Vec<u8>)> = files(dir.path())
+            .into_iter()
+            .map(|f| {
+                (
+                    f.clone(),
+                    std::fs::read(dir.path().join(&f)).unwrap_or_default(),
+                )
+            })
+            .collect();
+        for clip_frames in [0, 2] {
+            let path = dir.path().join("test-shot.usda");
+            let mut w = UsdaWriter::create(&path, &m, clip_frames).unwrap();
+            for f in 1..=5 {
+                let s = swarm_frame(4, f, 1);
+                w.write_frame(&Frame {
+                    frame: f,
+                    time: 0.0,
+                    swarms: std::slice::from_ref(&s),
+                })
+                .unwrap();
+            }
+            drop(w); // interrupted before the last frame
+            let after: Vec<(String, Vec<u8>)> = files(dir.path())
+                .into_iter()
+                .map(|f| {
+                    (
+                        f.clone(),
+                        std::fs::read(dir.path().join(&f)).unwrap_or_default(),
+                    )
+                })
+                .collect();
+            assert_eq!(before, after);
+        }
+    }
+
+    #[test]
+    fn clips_split_samples_and_overlap_by_one_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[3, 1], (1, 10));
+        let out = bake(dir.path(), &m, 4).unwrap();
+        assert_eq!(
+            files(dir.path()),
+            vec![
+                "test-shot.clips",
+                "test-shot.clips/test-shot.0001.usda",
+                "test-shot.clips/test-shot.0002.usda",
+                "test-shot.clips/test-shot.0003.usda",
+                "test-shot.clips/test-shot.manifest.usda",
+                "test-shot.usda",
+            ]
+        );
+        assert_eq!(out.len(), 5);
+        let main = std::fs::read_to_string(dir.path().join("test-shot.usda")).unwrap();
+        assert!(
+            !main.contains("timeSamples"),
+            "the main layer holds no samples"
+        );
+        assert!(main.contains("double2[] active = [(1, 0), (5, 1), (9, 2)]"));
+        assert!(main.contains(
+            "asset[] assetPaths = [@./test-shot.clips/test-shot.0001.usda@, \
+             @./test-shot.clips/test-shot.0002.usda@, @./test-shot.clips/test-shot.0003.usda@]"
+        ));
+        assert!(
+            main.contains("asset manifestAssetPath = @./test-shot.clips/test-shot.manifest.usda@")
+        );
+        assert!(main.contains("double2[] times = [(1, 1), (10, 10)]"));
+        assert!(main.contains("string primPath = \"/test_shot\""));
+
+        let single = tempfile::tempdir().unwrap();
+        bake(single.path(), &m, 0).unwrap();
+        let whole = std::fs::read_to_string(single.path().join("test-shot.usda")).unwrap();
+        let sample = |t: &str, attr: Attr, nth: usize, f: i32| -> String {
+            let head = format!("{}.timeSamples = {{\n", attr.decl());
+            let at = t.match_indices(&head).nth(nth).unwrap().0;
+            let line = format!("            {f}: [");
+            let from = at + t[at..].find(&line).unwrap();
+            t[from..from + t[from..].find('\n').unwrap()].to_owned()
+        };
+        let clip = |n| {
+            std::fs::read_to_string(
+                dir.path()
+                    .join(format!("test-shot.clips/test-shot.000{n}.usda")),
+            )
+            .unwrap()
+        };
+        for attr in ATTRS {
+            for (n, frames) in [(1, 1..=5), (2, 5..=9), (3, 9..=10)] {
+                let c = clip(n);
+                for f in frames {
+                    for swarm in 0..2 {
+                        assert_eq!(sample(&c, attr, swarm, f), sample(&whole, attr, swarm, f));
+                    }
+                }
+            }
+        }
+        // Shrinking the clip count removes the clips no longer referenced.
+        bake(dir.path(), &m, 5).unwrap();
+        assert_eq!(files(dir.path()).len(), 5);
+        bake(dir.path(), &m, 0).unwrap();
+        assert_eq!(files(dir.path()), vec!["test-shot.usda"]);
+    }
+
+    #[test]
+    fn an_empty_swarm_is_an_empty_instancer() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[0, 2], (1, 2));
+        bake(dir.path(), &m, 0).unwrap();
+        let t = std::fs::read_to_string(dir.path().join("test-shot.usda")).unwrap();
+        assert!(t.contains("int64[] ids = []\n        int[] protoIndices = []\n"));
+        assert!(t.contains("point3f[] positions.timeSamples = {\n            1: [],\n"));
+        assert!(
+            t.contains("float3[] extent.timeSamples = {\n            1: [(0, 0, 0), (0, 0, 0)],\n")
+        );
+    }
+
+    #[test]
+    fn one_frame_shot_in_clips_mode() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[2], (5, 5));
+        assert_eq!(bake(dir.path(), &m, 24).unwrap().len(), 3);
+        let main = std::fs::read_to_string(dir.path().join("test-shot.usda")).unwrap();
+        assert!(main.contains("double2[] active = [(5, 0)]"));
+        assert!(main.contains("double2[] times = [(5, 5)]"));
+    }
+
+    #[test]
+    fn output_is_deterministic_and_independent_of_threads() {
+        let m = meta(&[PIECE * 2 + 17, 5], (3, 5));
+        let a = tempfile::tempdir().unwrap();
+        let b = tempfile::tempdir().unwrap();
+        bake(a.path(), &m, 0).unwrap();
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| bake(b.path(), &m, 0))
+            .unwrap();
+        let read = |d: &Path| std::fs::read(d.join("test-shot.usda")).unwrap();
+        assert!(read(a.path()) == read(b.path()));
+    }
+
+    /// Writes sample caches for manual inspection with usd-core:
+    /// `BEESWARM_USDA_SAMPLE=/tmp/x cargo test --release usda::tests::write_sample -- --ignored`
+    #[test]
+    #[ignore]
+    fn write_sample() {
+        let dir = PathBuf::from(std::env::var("BEESWARM_USDA_SAMPLE").unwrap());
+        let m = meta(&[5, 3], (-3, 8));
+        std::fs::create_dir_all(dir.join("single")).unwrap();
+        std::fs::create_dir_all(dir.join("clips")).unwrap();
+        bake(&dir.join("single"), &m, 0).unwrap();
+        bake(&dir.join("clips"), &m, 5).unwrap();
+    }
+}

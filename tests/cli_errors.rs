@@ -1,0 +1,785 @@
+//! The command line's answers to bad input, run on the real binary: every message names
+//! the file, line, column and key and says what was expected; exit code 2 for a bad shot
+//! or argument, 1 for a failure while baking; never a panic; never an output file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use tempfile::TempDir;
+
+/// What one run of the binary did.
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `beeswarm args…` in `dir`.
+fn beeswarm(dir: &Path, args: &[&str]) -> Run {
+    let out = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the beeswarm binary runs");
+    let run = Run {
+        code: out.status.code().expect("exited, not killed by a signal"),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    };
+    for marker in ["panicked", "RUST_BACKTRACE", "stack backtrace"] {
+        assert!(
+            !run.stderr.contains(marker) && !run.stdout.contains(marker),
+            "beeswarm {args:?} must not panic:\n{}",
+            run.stderr
+        );
+    }
+    run
+}
+
+/// Every file under `dir` (recursively), relative to it, sorted.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Asserts that the folder holds exactly `expected` files (the inputs): nothing was written.
+fn assert_only(dir: &Path, expected: &[&str]) {
+    let mut want: Vec<PathBuf> = expected.iter().map(PathBuf::from).collect();
+    want.sort();
+    assert_eq!(files_under(dir), want, "no output file may appear");
+}
+
+/// Asserts that `text` contains every one of `parts`.
+#[track_caller]
+fn assert_says(text: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(
+            text.contains(p),
+            "expected the message to contain {p:?}:\n{text}"
+        );
+    }
+}
+
+/// Writes `src` as `shot.toml` in a fresh folder, bakes it as CSV into `out/` and checks
+/// it with `beeswarm check`. Both must refuse it with exit code 2, the same message, and
+/// no file written. Returns the bake's stderr.
+fn refuse(src: impl AsRef<[u8]>) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("shot.toml"), src).unwrap();
+    let bake = beeswarm(
+        dir.path(),
+        &["bake", "shot.toml", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(bake.code, 2, "bad shot → exit 2:\n{}", bake.stderr);
+    assert!(
+        bake.stderr.starts_with("error: shot.toml"),
+        "{}",
+        bake.stderr
+    );
+    let check = beeswarm(dir.path(), &["check", "shot.toml"]);
+    assert_eq!(check.code, 2, "{}", check.stderr);
+    assert_eq!(check.stderr, bake.stderr, "check and bake report alike");
+    assert_eq!(check.stdout, "", "check prints no summary for a bad shot");
+    assert_only(dir.path(), &["shot.toml"]);
+    assert!(!dir.path().join("out").exists(), "not even the folder");
+    bake.stderr
+}
+
+/// The line of an error message that shows the source, and the caret line below it.
+fn caret_column(stderr: &str) -> usize {
+    let caret = stderr
+        .lines()
+        .find(|l| l.trim_end().ends_with('^') && l.contains('|'))
+        .unwrap_or_else(|| panic!("no caret line:\n{stderr}"));
+    caret.find('^').unwrap()
+}
+
+#[test]
+fn a_valid_shot_bakes_with_exit_0_and_writes_the_tracks() {
+    // The control for everything below: the same harness accepts a good shot.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("shot.toml"),
+        "[scene]\nframes = [1, 3]\n[[swarm]]\ncount = 4\n",
+    )
+    .unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "shot.toml", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4 * 3);
+}
+
+#[test]
+fn missing_shot_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "nope.toml", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &["error: nope.toml: no such shot file", "hint:"],
+    );
+    assert_only(dir.path(), &[]);
+    assert_eq!(beeswarm(dir.path(), &["check", "nope.toml"]).code, 2);
+}
+
+#[test]
+fn a_folder_given_as_the_shot() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("shots")).unwrap();
+    let run = beeswarm(dir.path(), &["check", "shots"]);
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["shots: this is a folder, not a shot file"]);
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "shots", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["shots: this is a folder, not a shot file"]);
+    assert_only(dir.path(), &[]);
+    assert!(!dir.path().join("out").exists());
+}
+
+#[test]
+fn binary_garbage_is_located_at_its_first_bad_byte() {
+    let mut bytes = b"[[swarm]]\ncount = 3\nname = \"ab".to_vec();
+    bytes.extend_from_slice(&[0xff, 0xfe, 0x00, 0x9c, b'\n']);
+    let err = refuse(bytes);
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:11:",
+            "not a text file: byte 0xff is not UTF-8",
+            "expected TOML text in UTF-8",
+            "hint:",
+        ],
+    );
+}
+
+#[test]
+fn control_characters_are_not_toml_and_are_not_echoed() {
+    let err = refuse(b"\x00\x01\x1b[2J garbage\n");
+    assert_says(&err, &["shot.toml:1:1:", "not valid TOML"]);
+    assert!(
+        !err.contains('\x1b') && !err.contains('\0'),
+        "raw control characters would garble the terminal: {err:?}"
+    );
+}
+
+#[test]
+fn unterminated_table_header() {
+    let err = refuse("[[swarm\ncount = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:1:8:",
+            "not valid TOML: invalid table header",
+            "expected `.`, `]]`",
+            " 1 | [[swarm",
+        ],
+    );
+    // One line of message, then the source line, then the caret under column 8.
+    assert_eq!(err.lines().count(), 3, "{err}");
+    assert_eq!(caret_column(&err), " 1 | [[swarm".len());
+}
+
+#[test]
+fn unknown_key_names_the_path_lists_the_known_keys_and_suggests_one() {
+    let err = refuse("[[swarm]]\ncuont = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:1:",
+            "key `swarm[0].cuont`",
+            "unknown field `cuont`",
+            "expected one of `name`, `count`",
+            "hint: did you mean `count`?",
+            " 2 | cuont = 3",
+        ],
+    );
+}
+
+#[test]
+fn unknown_keys_in_inline_tables_and_top_level_tables() {
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { centre = [0, 1, 0] }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:11:",
+            "key `swarm[0].spawn.centre`",
+            "did you mean `center`?",
+        ],
+    );
+    let err = refuse("[sceen]\nfps = 30\n[[swarm]]\ncount = 3\n");
+    assert_says(
+        &err,
+        &["shot.toml:1:2:", "key `sceen`", "did you mean `scene`?"],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\n[output]\nformat = [\"csv\"]\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:4:1:",
+            "key `output.format`",
+            "did you mean `formats`?",
+        ],
+    );
+    // Nothing close: no wild guess.
+    let err = refuse("[[swarm]]\ncount = 3\nzzzzzzzz = 1\n");
+    assert_says(&err, &["key `swarm[0].zzzzzzzz`", "check the spelling"]);
+    assert!(!err.contains("did you mean"), "{err}");
+}
+
+#[test]
+fn wrong_type() {
+    let err = refuse("[[swarm]]\ncount = \"many\"\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:9:",
+            "key `swarm[0].count`",
+            "invalid type: string \"many\", expected a whole number",
+        ],
+    );
+    assert_eq!(caret_column(&err), " 2 | count = ".len());
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { center = [0, 1] }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:20:",
+            "key `swarm[0].spawn.center`",
+            "expected a list of three numbers [x, y, z]",
+        ],
+    );
+}
+
+#[test]
+fn negative_and_zero_counts() {
+    for (count, col) in [("-5", 9), ("0", 9)] {
+        let err = refuse(format!("[scene]\nfps = 24\n[[swarm]]\ncount = {count}\n"));
+        assert_says(
+            &err,
+            &[
+                &format!("shot.toml:4:{col}:"),
+                "key `swarm[0].count`",
+                &format!("expected at least 1 bee, found {count}"),
+                "hint: remove the swarm",
+            ],
+        );
+    }
+    // The second swarm is named by its index.
+    let err = refuse("[[swarm]]\ncount = 3\n[[swarm]]\nname = \"b\"\ncount = -1\n");
+    assert_says(&err, &["shot.toml:5:9:", "key `swarm[1].count`"]);
+}
+
+#[test]
+fn missing_count_and_missing_swarm() {
+    let err = refuse("[[swarm]]\nname = \"a\"\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:1:1:",
+            "key `swarm[0].count`",
+            "missing key `count`: expected the number of bees",
+        ],
+    );
+    let err = refuse("[scene]\nfps = 24\n");
+    assert_says(
+        &err,
+        &[
+            "key `swarm`",
+            "the shot has no swarm",
+            "hint: add one",
+            "count = 200",
+        ],
+    );
+}
+
+#[test]
+fn reversed_frame_range() {
+    let err = refuse("[scene]\nframes = [120, 1]\n[[swarm]]\ncount = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:10:",
+            "key `scene.frames`",
+            "the frame range is reversed: [120, 1]",
+            "hint: write frames = [1, 120]",
+        ],
+    );
+}
+
+#[test]
+fn zero_fps() {
+    let err = refuse("[scene]\nfps = 0\n[[swarm]]\ncount = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:7:",
+            "key `scene.fps`",
+            "expected frames per second between 1 and 1000, found 0",
+        ],
+    );
+}
+
+#[test]
+fn nan_and_infinite_numbers() {
+    let err = refuse("[scene]\nfps = nan\n[[swarm]]\ncount = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:7:",
+            "key `scene.fps`",
+            "expected a finite number, found nan",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { shape = \"sphere\", radius = inf }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:38:",
+            "key `swarm[0].spawn.radius`",
+            "expected a finite number, found inf",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"sphere\"\ncenter = [0, -inf, 0]\nradius = 1\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:5:14:",
+            "key `obstacle[0].center[1]`",
+            "found -inf",
+        ],
+    );
+    // A whole number cannot be nan either, and says what it expected.
+    let err = refuse("[[swarm]]\ncount = nan\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:9:",
+            "key `swarm[0].count`",
+            "expected a whole number",
+        ],
+    );
+}
+
+#[test]
+fn spawn_region_inside_an_obstacle() {
+    let err = refuse(
+        "[[swarm]]\ncount = 3\nspawn = { center = [0, 1, 0], size = [0.2, 0.2, 0.2] }\n\n[[obstacle]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 1\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:9:",
+            "key `swarm[0].spawn`",
+            "the spawn region lies entirely inside obstacles",
+            "hint: move the spawn centre",
+        ],
+    );
+}
+
+#[test]
+fn a_key_of_the_other_spawn_shape() {
+    // `radius` without `shape = "sphere"` would otherwise be ignored for the default box.
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { center = [0, 1, 0], radius = 0.5 }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:40:",
+            "key `swarm[0].spawn.radius`",
+            "a box spawn region has no `radius`",
+            "hint: a box takes center and size; for a sphere write shape = \"sphere\"",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[swarm.spawn]\nshape = \"sphere\"\nradius = 0.5\nsize = [1, 1, 1]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:8:",
+            "key `swarm[0].spawn.size`",
+            "a sphere spawn region has no `size`",
+        ],
+    );
+}
+
+#[test]
+fn values_out_of_range_say_the_range() {
+    let err = refuse("[[swarm]]\ncount = 3\nparams = { kappa1 = 200 }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:21:",
+            "key `swarm[0].params.kappa1`",
+            "expected a weight from 0 to 100, found 200",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\npreset = \"meadow\"\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:10:",
+            "key `swarm[0].preset`",
+            "expected one of \"grassland\", \"nest\", \"optimized\" or a preset file",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\n[output]\nformats = [\"csv\", \"fbx\"]\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:4:19:",
+            "key `output.formats[1]`",
+            "expected one of \"glb\", \"gltf\", \"usda\", \"csv\", found \"fbx\"",
+        ],
+    );
+}
+
+#[test]
+fn keys_of_another_obstacle_type_and_unknown_swarm_names() {
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.1\nheight = 2\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:7:10:",
+            "key `obstacle[0].height`",
+            "a sphere has no `height`",
+            "hint: a sphere takes center, radius",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\nname = \"bees\"\ncount = 3\n[[target]]\nposition = [0, 1, 0]\nswarms = [\"bes\"]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:11:",
+            "key `target[0].swarms[0]`",
+            "no swarm named \"bes\"; the shot has \"bees\"",
+        ],
+    );
+}
+
+#[test]
+fn preset_files_missing_or_bad() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\npreset = \"meadow.toml\"\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "shot.toml:3:10:",
+            "key `swarm[0].preset`",
+            "cannot read the preset file meadow.toml",
+            "hint: built-in presets",
+        ],
+    );
+    std::fs::write(
+        p.join("meadow.toml"),
+        "[preset]\nname = \"meadow\"\nbase = \"grassland\"\n\n[params]\nkapa1 = 2\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "shot.toml:3:10:",
+            "the preset file \"meadow.toml\" has an error",
+            "meadow.toml:6:1: key `params.kapa1`",
+            "did you mean `kappa1`?",
+        ],
+    );
+    assert_only(p, &["shot.toml", "meadow.toml"]);
+}
+
+#[test]
+fn output_folder_under_a_regular_file() {
+    // Tests run as root, so a read-only folder would not stop the write: use a path whose
+    // parent is a file.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("shot.toml"), "[[swarm]]\ncount = 3\n").unwrap();
+    std::fs::write(p.join("notes.txt"), "a file, not a folder").unwrap();
+    let run = beeswarm(
+        p,
+        &[
+            "bake",
+            "shot.toml",
+            "--out",
+            "notes.txt/caches",
+            "--format",
+            "csv",
+        ],
+    );
+    assert_eq!(
+        run.code, 2,
+        "an unusable --out is bad input:\n{}",
+        run.stderr
+    );
+    assert_says(
+        &run.stderr,
+        &[
+            "error: cannot create the output folder notes.txt/caches (--out): notes.txt is a file, not a folder",
+        ],
+    );
+    // The file itself as the folder.
+    let run = beeswarm(
+        p,
+        &["bake", "shot.toml", "--out", "notes.txt", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &["error: the output folder notes.txt (--out) is a file, not a folder"],
+    );
+    // The same folder given by the shot's [output] dir.
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\n[output]\ndir = \"notes.txt/caches\"\nformats = [\"csv\"]\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["bake", "shot.toml"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &["notes.txt/caches (the shot's [output] dir): notes.txt is a file, not a folder"],
+    );
+    assert_only(p, &["shot.toml", "notes.txt"]);
+    assert_eq!(
+        std::fs::read_to_string(p.join("notes.txt")).unwrap(),
+        "a file, not a folder"
+    );
+}
+
+#[test]
+fn a_failure_while_baking_exits_1_and_leaves_no_file() {
+    // A folder sits where the tracks file must go: the bake runs, then cannot write.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 4]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    std::fs::create_dir_all(p.join("out/shot.tracks.csv")).unwrap();
+    let run = beeswarm(p, &["bake", "shot.toml", "--out", "out", "--format", "csv"]);
+    assert_eq!(
+        run.code, 1,
+        "a failure while baking → exit 1:\n{}",
+        run.stderr
+    );
+    assert_says(
+        &run.stderr,
+        &[
+            "error: cannot write out/shot.tracks.csv",
+            "a folder stands there",
+        ],
+    );
+    assert!(p.join("out/shot.tracks.csv").is_dir());
+    // No temporary file left behind either.
+    assert_only(p, &["shot.toml"]);
+}
+
+#[test]
+fn a_failure_in_one_format_leaves_every_previous_cache_untouched() {
+    // The previous CSV cache exists; a folder blocks the glb. Nothing may be replaced,
+    // not even the CSV that could have been written.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 4]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    std::fs::create_dir_all(p.join("out/shot.glb")).unwrap();
+    std::fs::write(p.join("out/shot.tracks.csv"), "previous cache").unwrap();
+    let run = beeswarm(
+        p,
+        &["bake", "shot.toml", "--out", "out", "--format", "csv,glb"],
+    );
+    assert_eq!(run.code, 1, "{}", run.stderr);
+    assert_says(&run.stderr, &["cannot write out/shot.glb"]);
+    assert_eq!(
+        std::fs::read_to_string(p.join("out/shot.tracks.csv")).unwrap(),
+        "previous cache"
+    );
+    assert_only(p, &["shot.toml", "out/shot.tracks.csv"]);
+}
+
+/// Bakes a good shot with `args` appended; returns the run and the folder.
+fn bake_with(args: &[&str]) -> (Run, TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("shot.toml"),
+        "[scene]\nframes = [1, 3]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    let mut all = vec!["bake", "shot.toml", "--out", "out"];
+    all.extend_from_slice(args);
+    (beeswarm(dir.path(), &all), dir)
+}
+
+#[test]
+fn bad_frames_arguments() {
+    for (arg, says) in [
+        ("10:1", "the frame range 10:1 is reversed; write 1:10"),
+        ("abc", "expected START:END, e.g. 1:120, found \"abc\""),
+        ("1:", "expected a whole end frame, found \"\""),
+        ("x:5", "expected a whole start frame, found \"x\""),
+        ("1.5:3", "expected a whole start frame"),
+        (
+            "-2000000000:2000000000",
+            "expected at most 100000 frames within ±1000000",
+        ),
+    ] {
+        let (run, dir) = bake_with(&["--format", "csv", "--frames", arg]);
+        assert_eq!(run.code, 2, "--frames {arg}:\n{}", run.stderr);
+        assert_says(
+            &run.stderr,
+            &[
+                &format!("invalid value '{arg}' for '--frames <FRAMES>'"),
+                says,
+            ],
+        );
+        assert_only(dir.path(), &["shot.toml"]);
+    }
+}
+
+#[test]
+fn bad_format_arguments() {
+    for (arg, bad) in [("fbx", "fbx"), ("csv,abc", "abc"), ("", ""), ("csv,", "")] {
+        let (run, dir) = bake_with(&["--frames", "1:2", "--format", arg]);
+        assert_eq!(run.code, 2, "--format {arg:?}:\n{}", run.stderr);
+        assert_says(
+            &run.stderr,
+            &[
+                "'--format <FORMAT>'",
+                &format!("unknown format \"{bad}\": expected glb, gltf, usda or csv"),
+            ],
+        );
+        assert_only(dir.path(), &["shot.toml"]);
+    }
+}
+
+#[test]
+fn unknown_arguments_and_commands() {
+    let (run, dir) = bake_with(&["--fromat", "csv"]);
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["unexpected argument '--fromat'", "--format"]);
+    assert_only(dir.path(), &["shot.toml"]);
+    let run = beeswarm(dir.path(), &["bkae"]);
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["unrecognized subcommand 'bkae'", "bake"]);
+    let run = beeswarm(dir.path(), &["bench", "--bees", "0"]);
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["--bees and --frames must be at least 1"]);
+}
+
+#[test]
+fn good_arguments_are_accepted() {
+    // Repeated and mixed-case formats, negative frames: exit 0 and exactly the CSV.
+    let (run, dir) = bake_with(&["--format", "CSV,csv", "--frames", "-2:1"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
+    let frames: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    assert_eq!(frames.len(), 3 * 4);
+    assert_eq!((frames[0], frames[frames.len() - 1]), ("-2", "1"));
+}
+
+#[test]
+fn bad_bench_options_name_the_option() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, says) in [
+        (
+            &["--substeps", "0"][..],
+            "error: --substeps: expected a whole number of substeps from 1 to 64, found 0",
+        ),
+        (
+            &["--preset", "meadow"][..],
+            "error: --preset: expected one of \"grassland\", \"nest\", \"optimized\"",
+        ),
+        (
+            &["--frames", "200000"][..],
+            "error: --frames: expected at most 100000 frames",
+        ),
+    ] {
+        let mut all = vec!["bench", "--bees", "10"];
+        all.extend_from_slice(args);
+        if !args.contains(&"--frames") {
+            all.extend_from_slice(&["--frames", "2"]);
+        }
+        let run = beeswarm(dir.path(), &all);
+        assert_eq!(run.code, 2, "{args:?}: {}", run.stderr);
+        assert_says(&run.stderr, &[says]);
+        assert!(!run.stderr.contains("<bench>"), "{}", run.stderr);
+        assert_eq!(run.stdout, "", "no measurement printed");
+    }
+    assert_only(dir.path(), &[]);
+}
+
+#[test]
+fn a_file_name_that_cannot_name_the_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("my shot.toml"), "[[swarm]]\ncount = 3\n").unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["bake", "my shot.toml", "--out", "out", "--format", "csv"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &[
+            "error: my shot.toml: key `scene.name`",
+            "the shot is named after its file, \"my shot\"",
+            "hint: name it in the shot: [scene] name = \"my_shot\"",
+        ],
+    );
+    assert_only(dir.path(), &["my shot.toml"]);
+}
+
+#[test]
+fn wing_flap_above_half_the_frame_rate() {
+    let err = refuse("[scene]\nfps = 30\n[[swarm]]\ncount = 3\n[output]\nwing_flap_hz = 20\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:16:",
+            "key `output.wing_flap_hz`",
+            "up to half the frame rate (15 Hz at 30 fps), found 20",
+        ],
+    );
+}

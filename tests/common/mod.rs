@@ -1,0 +1,59 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use beeswarm::shot::{self, Shot};
+use beeswarm::sim::Simulation;
+use glam::Vec3;
+use std::path::Path;
+
+pub fn shot(src: &str) -> Shot {
+    shot::parse(src, Path::new("test.toml"), Path::new("."))
+        .unwrap_or_else(|e| panic!("test shot is invalid: {e}"))
+}
+
+/// Runs a shot to its end and returns every bee's positions per frame: `[frame][bee]`.
+pub fn run(shot: &Shot) -> Vec<Vec<Vec3>> {
+    run_with(Simulation::new(shot), |_| {})
+}
+
+/// Runs a prepared simulation, calling `inspect` at every frame, and returns positions.
+pub fn run_with(mut sim: Simulation, mut inspect: impl FnMut(&Simulation)) -> Vec<Vec<Vec3>> {
+    let mut frames = Vec::new();
+    loop {
+        inspect(&sim);
+        frames.push(
+            sim.record()
+                .iter()
+                .flat_map(|s| s.position.iter().copied())
+                .collect(),
+        );
+        if sim.done() {
+            break;
+        }
+        sim.advance();
+    }
+    frames
+}
+
+/// Asserts that nothing recorded is NaN or infinite.
+pub fn assert_all_finite(sim: &Simulation) {
+    for s in sim.record() {
+        for i in 0..s.len() {
+            assert!(
+                s.position[i].is_finite() && s.velocity[i].is_finite(),
+                "bee {} at frame {}",
+                s.ids[i],
+                sim.frame()
+            );
+            assert!(
+                s.orientation[i].is_finite() && s.orientation[i].is_normalized(),
+                "bee {} orientation",
+                s.ids[i]
+            );
+            assert!(
+                s.pitch_deg[i].is_finite() && s.roll_deg[i].is_finite() && s.sway_m[i].is_finite()
+            );
+            assert!(s.angular_velocity_deg[i].is_finite() && s.scale[i].is_finite());
+        }
+    }
+}

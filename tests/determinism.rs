@@ -1,0 +1,99 @@
+//! The same shot and seed give byte-identical caches whatever the number of threads, and
+//! a different seed gives a different swarm.
+
+use std::path::Path;
+use std::process::Command;
+
+const SHOT: &str = r#"
+[scene]
+name = "det"
+fps = 24
+frames = [1, 25]
+seed = 11
+[[swarm]]
+name = "bees"
+count = 300
+preset = "nest"
+spawn = { shape = "box", center = [0, 1, 0.5], size = [1, 0.5, 0.5] }
+[[swarm]]
+name = "boids"
+count = 60
+model = "boids"
+[[swarm]]
+name = "brownian"
+count = 60
+model = "brownian"
+[[obstacle]]
+type = "cylinder"
+center = [0.3, 1, 0.3]
+radius = 0.05
+height = 2
+[[target]]
+type = "nest"
+position = [0, 1, 0]
+swarms = ["bees", "boids"]
+"#;
+
+fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {
+    let shot = dir.join("det.toml");
+    std::fs::write(&shot, SHOT).unwrap();
+    let out = dir.join(format!("t{threads}-{}", seed.unwrap_or(0)));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
+    cmd.args([
+        "bake",
+        shot.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--format",
+        "csv",
+        "--progress",
+        "none",
+        "--threads",
+        &threads.to_string(),
+    ]);
+    if let Some(s) = seed {
+        cmd.args(["--seed", &s.to_string()]);
+    }
+    let status = cmd.output().unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn caches_are_byte_identical_with_1_and_4_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = bake(dir.path(), 1, None);
+    let four = bake(dir.path(), 4, None);
+    assert!(!one.is_empty());
+    assert_eq!(
+        one.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        four.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for ((name, a), (_, b)) in one.iter().zip(&four) {
+        assert!(a.len() > 1000, "{name} is too small to mean anything");
+        assert!(a == b, "{name} differs between 1 and 4 threads");
+    }
+}
+
+#[test]
+fn another_seed_gives_another_swarm() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = bake(dir.path(), 2, Some(1));
+    let b = bake(dir.path(), 2, Some(2));
+    assert_ne!(a[0].1, b[0].1);
+}

@@ -1,0 +1,415 @@
+//! The behaviours paper 000 describes, checked on the whole simulation.
+
+mod common;
+
+use beeswarm::sim::Simulation;
+use beeswarm::sim::obstacle::signed_distance;
+use common::*;
+use glam::Vec3;
+
+/// A single bee flying along +X at 2 m/s from x = −0.25 through `obstacles` (TOML),
+/// without noise. It starts close to the obstacles so its maneuvering sway (Eq. 4) cannot
+/// carry it out of their way before it sees them.
+fn lone_bee(obstacles: &str, frames: u32) -> Simulation {
+    let src = format!(
+        "[scene]\nfps = 100\nframes = [1, {frames}]\nsubsteps = 2\n[[swarm]]\ncount = 1\nvariation = {{ size = 0, speed = 0, phase = 0 }}\nbounds = {{ center = [0, 1, 0], size = [40, 40, 40] }}\nparams = {{ kappa2 = 0, speed = 2.0 }}\nspawn = {{ shape = \"sphere\", center = [-0.25, 1, 0], radius = 0.001 }}\n{obstacles}"
+    );
+    let mut sim = Simulation::new(&shot(&src));
+    sim.set_bee(0, Vec3::new(-0.25, 1.0, 0.0), Vec3::new(2.0, 0.0, 0.0));
+    sim
+}
+
+/// Roll (degrees) and z position per frame of the lone bee.
+fn roll_and_z(obstacles: &str, frames: u32) -> Vec<(f32, f32, f32)> {
+    let mut out = Vec::new();
+    run_with(lone_bee(obstacles, frames), |sim| {
+        let s = &sim.record()[0];
+        out.push((s.position[0].x, s.roll_deg[0], s.position[0].z));
+    });
+    out
+}
+
+/// A sphere of radius 0.15 m ahead of the bee, its centre 5 cm off the flight line on the
+/// side `side` (−1 left, +1 right): the bee flies at it and must go round.
+fn sphere_beside(side: f32) -> String {
+    format!(
+        "[[obstacle]]\ntype = \"sphere\"\ncenter = [0.1, 1, {}]\nradius = 0.15\n",
+        side * 0.05
+    )
+}
+
+#[test]
+fn roll_to_avoid_banks_away_from_an_obstacle_on_either_side() {
+    // The same bee with and without the shaft: the difference is the avoidance.
+    let free = roll_and_z("", 60);
+    for (side_z, expected_sign) in [(-1.0f32, 1.0f32), (1.0, -1.0)] {
+        // A sphere just off the flight line, on the left (−Z) or the right (+Z).
+        let obstacle = sphere_beside(side_z);
+        let with = roll_and_z(&obstacle, 60);
+        let extra_roll = with
+            .iter()
+            .zip(&free)
+            .map(|(w, f)| (w.1 - f.1) * expected_sign)
+            .fold(f32::MIN, f32::max);
+        let wrong_roll = with
+            .iter()
+            .zip(&free)
+            .map(|(w, f)| (w.1 - f.1) * -expected_sign)
+            .fold(f32::MIN, f32::max);
+        let (w_end, f_end) = (with.last().unwrap(), free.last().unwrap());
+        println!(
+            "obstacle on side {side_z}: extra roll away {extra_roll:.1}°, towards {wrong_roll:.1}°, lateral shift {:.3} m",
+            w_end.2 - f_end.2
+        );
+        assert!(
+            extra_roll > 8.0,
+            "the bee banks away from the obstacle: {extra_roll}°"
+        );
+        assert!(wrong_roll < 1.0, "never towards it: {wrong_roll}°");
+        // Banking away moves the bee away: positive roll pushes right (+Z).
+        assert!(
+            (w_end.2 - f_end.2) * expected_sign > 0.01,
+            "pushed away from the obstacle"
+        );
+    }
+}
+
+#[test]
+fn the_bee_levels_out_after_passing_an_obstacle() {
+    let free = roll_and_z("", 100);
+    let with = roll_and_z(&sphere_beside(-1.0), 100);
+    let during = with
+        .iter()
+        .zip(&free)
+        .map(|(w, f)| (w.1 - f.1).abs())
+        .fold(0.0f32, f32::max);
+    // Once past (x > 0.5 m) the roll is back on the maneuvering function Eq. 4.
+    let after = with
+        .iter()
+        .zip(&free)
+        .filter(|(w, _)| w.0 > 0.5)
+        .map(|(w, f)| (w.1 - f.1).abs())
+        .fold(0.0f32, f32::max);
+    println!(
+        "roll departs from Eq. 4 by up to {during:.1}° near the obstacle and by {after:.3}° after it"
+    );
+    assert!(
+        during > 8.0 && after < 0.5,
+        "during {during}, after {after}"
+    );
+}
+
+#[test]
+fn bees_flying_at_a_wall_for_ten_seconds_never_enter_it() {
+    let src = r#"
+[scene]
+fps = 24
+frames = [1, 241]
+substeps = 4
+seed = 4
+[[swarm]]
+count = 150
+preset = "grassland"
+spawn = { shape = "box", center = [-0.8, 1, 0], size = [0.6, 0.6, 0.6] }
+[[obstacle]]
+type = "box"
+center = [0.3, 1, 0]
+size = [0.2, 3, 3]
+[[target]]
+type = "attractor"
+position = [1.5, 1, 0]
+strength = 6
+"#;
+    let sh = shot(src);
+    let wall = sh.obstacles[0].shape;
+    let r = sh.swarms[0].bee.radius * (1.0 + sh.swarms[0].variation.size);
+    let mut closest = f32::INFINITY;
+    let mut near = 0;
+    let frames = run_with(Simulation::new(&sh), assert_all_finite);
+    for f in &frames {
+        for p in f {
+            let d = signed_distance(&wall, *p);
+            closest = closest.min(d);
+            if d < 0.05 {
+                near += 1;
+            }
+        }
+    }
+    println!(
+        "closest approach to the wall: {:.4} m ({} bee-frames within 5 cm)",
+        closest, near
+    );
+    assert!(
+        near > 100,
+        "the attractor must press bees against the wall for the test to mean anything"
+    );
+    assert!(closest >= 0.0, "a bee entered the wall: {closest}");
+    assert!(
+        closest > -1e-6
+            && frames
+                .iter()
+                .flatten()
+                .all(|p| signed_distance(&wall, *p) >= 0.0)
+    );
+    let _ = r;
+}
+
+#[test]
+fn a_swarm_passing_a_row_of_shafts_has_zero_penetrations() {
+    let mut src = String::from(
+        "[scene]\nfps = 24\nframes = [1, 145]\nsubsteps = 4\nseed = 2\n[[swarm]]\ncount = 120\npreset = \"optimized\"\nspawn = { shape = \"box\", center = [-1, 1, 0], size = [0.4, 0.4, 1.2] }\nparams = { speed = 1.5 }\n[[target]]\ntype = \"attractor\"\nposition = [1.5, 1, 0]\nstrength = 4\n",
+    );
+    for k in 0..7 {
+        let z = -0.6 + 0.2 * k as f32;
+        src += &format!(
+            "[[obstacle]]\ntype = \"shaft\"\na = [0, 0, {z}]\nb = [0, 2, {z}]\nradius = 0.025\n"
+        );
+    }
+    let sh = shot(&src);
+    let r = sh.swarms[0].bee.radius;
+    let mut penetrations = 0;
+    let mut rolled = 0;
+    let frames = run_with(Simulation::new(&sh), |sim| {
+        assert_all_finite(sim);
+        rolled += sim.record()[0]
+            .roll_deg
+            .iter()
+            .filter(|r| r.abs() > 25.0)
+            .count();
+    });
+    for f in &frames {
+        for p in f {
+            if sh
+                .obstacles
+                .iter()
+                .any(|o| signed_distance(&o.shape, *p) < r * 0.9 - 1e-5)
+            {
+                penetrations += 1;
+            }
+        }
+    }
+    let crossed = frames.last().unwrap().iter().filter(|p| p.x > 0.1).count();
+    println!(
+        "{crossed} of 120 bees crossed the row of shafts; {rolled} bee-frames rolled past 25°"
+    );
+    assert_eq!(penetrations, 0);
+    assert!(crossed > 60, "most bees get through the row: {crossed}");
+    assert!(rolled > 0, "bees roll to avoid the shafts");
+}
+
+#[test]
+fn bees_keep_apart_in_a_dense_swarm() {
+    let src = r#"
+[scene]
+fps = 24
+frames = [1, 97]
+seed = 5
+[[swarm]]
+count = 400
+preset = "nest"
+spawn = { shape = "sphere", center = [0, 1, 0], radius = 0.25 }
+bounds = { center = [0, 1, 0], size = [0.6, 0.6, 0.6] }
+params = { containment = 20 }
+"#;
+    let sh = shot(src);
+    let frames = run(&sh);
+    let contact = 2.0 * sh.swarms[0].bee.radius;
+    let mut min_d = f32::INFINITY;
+    let mut touching = 0usize;
+    let mut pairs = 0usize;
+    for f in &frames[24..] {
+        for i in 0..f.len() {
+            for j in i + 1..f.len() {
+                let d = f[i].distance(f[j]);
+                min_d = min_d.min(d);
+                pairs += 1;
+                if d < contact {
+                    touching += 1;
+                }
+            }
+        }
+    }
+    // 400 bees in a 0.6 m box: about 1850 bees per cubic metre.
+    println!(
+        "dense swarm: minimum centre distance {:.4} m (body contact at {contact} m), {touching} of {pairs} pair-frames touching",
+        min_d
+    );
+    assert!(min_d > contact * 0.5, "bodies overlap deeply: {min_d}");
+    assert!(
+        (touching as f64) < pairs as f64 * 1e-4,
+        "touching {touching} of {pairs}"
+    );
+}
+
+/// Local minima of a distance series that are at least `depth` below the maxima around them.
+fn approach_cycles(d: &[f32], depth: f32) -> usize {
+    let mut count = 0;
+    let mut hi = d[0];
+    let mut lo = f32::INFINITY;
+    let mut descending = true;
+    for &x in d {
+        if descending {
+            lo = lo.min(x);
+            if hi - lo >= depth && x - lo >= depth {
+                count += 1;
+                descending = false;
+                hi = x;
+            }
+        } else {
+            hi = hi.max(x);
+            if hi - x >= depth {
+                descending = true;
+                lo = x;
+            }
+        }
+    }
+    count
+}
+
+#[test]
+fn a_nest_produces_repeated_approach_and_retreat() {
+    let src = r#"
+[scene]
+fps = 25
+frames = [1, 501]
+seed = 6
+[[swarm]]
+count = 30
+preset = "nest"
+spawn = { shape = "box", center = [0, 1, 0.7], size = [0.8, 0.4, 0.4] }
+[[target]]
+type = "nest"
+position = [0, 1, 0]
+"#;
+    let frames = run(&shot(src));
+    let nest = Vec3::new(0.0, 1.0, 0.0);
+    let mut cycles: Vec<usize> = (0..30)
+        .map(|b| {
+            approach_cycles(
+                &frames
+                    .iter()
+                    .map(|f| f[b].distance(nest))
+                    .collect::<Vec<_>>(),
+                0.1,
+            )
+        })
+        .collect();
+    let closest = frames
+        .iter()
+        .flatten()
+        .map(|p| p.distance(nest))
+        .fold(f32::INFINITY, f32::min);
+    cycles.sort();
+    println!(
+        "approach–retreat cycles per bee in 20 s: {cycles:?}; closest approach {closest:.3} m"
+    );
+    assert!(cycles[15] >= 4, "median {} cycles", cycles[15]);
+    assert!(
+        closest > 0.08,
+        "the nest pushes bees back before they reach its body: {closest}"
+    );
+}
+
+#[test]
+fn vertical_oscillation_peaks_at_the_maneuvering_frequency() {
+    let fps = 100.0;
+    let src = "[scene]\nfps = 100\nframes = [1, 2000]\n[[swarm]]\ncount = 1\nvariation = { size = 0, speed = 0, phase = 0 }\nbounds = { center = [0, 1, 0], size = [200, 200, 200] }\nparams = { kappa2 = 0, speed = 3.0 }\n";
+    // Vertical velocity after the start-up transient (the initial climb decays in ~1 s).
+    let mut vy = Vec::new();
+    run_with(Simulation::new(&shot(src)), |sim| {
+        if sim.frame() > 300 {
+            vy.push(sim.record()[0].velocity[0].y as f64)
+        }
+    });
+    let y = vy;
+    // Remove the linear trend, then find the strongest frequency between 0.3 and 10 Hz.
+    let n = y.len() as f64;
+    let (mx, my) = ((n - 1.0) / 2.0, y.iter().sum::<f64>() / n);
+    let slope = y
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (i as f64 - mx) * (v - my))
+        .sum::<f64>()
+        / y.iter()
+            .enumerate()
+            .map(|(i, _)| (i as f64 - mx).powi(2))
+            .sum::<f64>();
+    let detrended: Vec<f64> = y
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v - my - slope * (i as f64 - mx))
+        .collect();
+    let power = |f: f64| {
+        let (mut re, mut im) = (0.0, 0.0);
+        for (i, v) in detrended.iter().enumerate() {
+            let a = std::f64::consts::TAU * f * i as f64 / fps;
+            re += v * a.cos();
+            im += v * a.sin();
+        }
+        re * re + im * im
+    };
+    let freqs: Vec<f64> = (30..1000).map(|k| k as f64 * 0.01).collect();
+    let peak = freqs.iter().copied().fold((0.0, 0.0), |(bf, bp), f| {
+        let p = power(f);
+        if p > bp { (f, p) } else { (bf, bp) }
+    });
+    let unit = beeswarm::model::BeeParams::nest().oscillation_time_unit;
+    let expected = 1.0 / (beeswarm::model::oscillation::PITCH_PERIOD * unit);
+    println!(
+        "vertical spectrum peak {:.3} Hz, Eq. 3 frequency {:.3} Hz",
+        peak.0, expected
+    );
+    assert!(
+        (peak.0 - expected).abs() < 0.05,
+        "peak {} Hz, expected {expected} Hz",
+        peak.0
+    );
+}
+
+#[test]
+fn degenerate_cases_never_produce_nan() {
+    // Coincident bees (a spawn sphere far below float resolution), zero velocity, a bee
+    // exactly on an obstacle surface, a bee spawned inside an obstacle, a bee on a box's
+    // centre, all at once.
+    let src = r#"
+[scene]
+fps = 24
+frames = [1, 49]
+[[swarm]]
+count = 40
+spawn = { shape = "sphere", center = [0, 1, 0], radius = 1e-9 }
+[[obstacle]]
+type = "sphere"
+center = [0.5, 1, 0]
+radius = 0.2
+[[obstacle]]
+type = "box"
+center = [-0.5, 1, 0]
+size = [0.2, 0.2, 0.2]
+[[obstacle]]
+type = "cylinder"
+center = [0, 1, 0.5]
+radius = 0.1
+height = 0.5
+[[target]]
+type = "nest"
+position = [0, 1, 0]
+"#;
+    let sh = shot(src);
+    let mut sim = Simulation::new(&sh);
+    sim.set_bee(0, Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO);
+    sim.set_bee(1, Vec3::new(0.3, 1.0, 0.0), Vec3::new(1.0, 0.0, 0.0)); // on the sphere's surface
+    sim.set_bee(2, Vec3::new(-0.5, 1.0, 0.0), Vec3::ZERO); // at the box's centre
+    sim.set_bee(3, Vec3::new(0.0, 1.0, 0.5), Vec3::ZERO); // on the cylinder's axis
+    sim.set_bee(4, Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO); // coincident with bee 0 and the nest centre
+    let frames = run_with(sim, assert_all_finite);
+    let r = sh.swarms[0].bee.radius * 0.9;
+    for p in frames.last().unwrap() {
+        for o in &sh.obstacles {
+            assert!(
+                signed_distance(&o.shape, *p) >= r - 1e-5,
+                "bee left inside {o:?} at {p}"
+            );
+        }
+    }
+}
