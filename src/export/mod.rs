@@ -10,7 +10,7 @@ pub mod gltf;
 pub mod preview;
 pub mod usda;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::sim::{CacheMeta, Frame};
 use std::path::Path;
 
