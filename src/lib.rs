@@ -19,3 +19,5 @@ pub mod shot;
 pub mod sim;
 
 pub use error::{Error, Result};
+pub mod eval;
+pub mod plot;

@@ -22,6 +22,8 @@ pub enum Command {
     Bake(bake::BakeArgs),
     Check(check::CheckArgs),
     Bench(bench::BenchArgs),
+    Eval(crate::eval::EvalArgs),
+    Calibrate(crate::eval::CalibrateArgs),
 }
 
 /// Parses arguments, runs the command, prints any error, returns the exit code.
@@ -38,6 +40,8 @@ pub fn main() -> i32 {
         Command::Bake(a) => bake::run(a),
         Command::Check(a) => check::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Eval(a) => crate::eval::run_eval(&a),
+        Command::Calibrate(a) => crate::eval::run_calibrate(&a),
     };
     match result {
         Ok(()) => 0,

@@ -60,6 +60,7 @@ impl AtomicFile {
             tmp,
             dest: std::mem::take(&mut self.dest),
             committed: false,
+            obsolete: Vec::new(),
         })
     }
 
@@ -77,11 +78,20 @@ pub struct SealedFile {
     tmp: PathBuf,
     dest: PathBuf,
     committed: bool,
+    /// Files made obsolete by this one, removed once it is in place.
+    obsolete: Vec<PathBuf>,
 }
 
 impl SealedFile {
     pub fn dest(&self) -> &Path {
         &self.dest
+    }
+
+    /// Files to delete once this one is in place (e.g. value clips a new cache no longer
+    /// uses); their folders go too when that leaves them empty.
+    pub fn remove_after_commit(mut self, paths: Vec<PathBuf>) -> Self {
+        self.obsolete = paths;
+        self
     }
 
     /// Renames the file into place. On failure the temporary file is removed.
@@ -90,6 +100,12 @@ impl SealedFile {
         if let Err(e) = std::fs::rename(&self.tmp, &self.dest) {
             let _ = std::fs::remove_file(&self.tmp);
             return Err(Error::io(&self.dest, e));
+        }
+        for p in &self.obsolete {
+            let _ = std::fs::remove_file(p);
+            if let Some(dir) = p.parent() {
+                let _ = std::fs::remove_dir(dir); // only succeeds when empty
+            }
         }
         Ok(std::mem::take(&mut self.dest))
     }
@@ -149,9 +165,30 @@ impl ScratchFile {
     }
 }
 
+impl ScratchFile {
+    /// Turns a complete scratch file into a sealed file for `dest` (same folder), synced to
+    /// disk; it is no longer deleted on drop, but by the sealed file unless committed.
+    pub fn seal_as(mut self, dest: PathBuf) -> Result<SealedFile> {
+        let tmp = std::mem::take(&mut self.path);
+        let synced = std::fs::File::open(&tmp).and_then(|f| f.sync_all());
+        if let Err(e) = synced {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(Error::io(&tmp, e));
+        }
+        Ok(SealedFile {
+            tmp,
+            dest,
+            committed: false,
+            obsolete: Vec::new(),
+        })
+    }
+}
+
 impl Drop for ScratchFile {
     fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
+        if !self.path.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
 

@@ -7,9 +7,10 @@
 pub mod atomic;
 pub mod csv;
 pub mod gltf;
+pub mod preview;
 pub mod usda;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::sim::{CacheMeta, Frame};
 use std::path::Path;
 
@@ -83,10 +84,7 @@ pub fn open_preview(
     meta: &CacheMeta,
     dir: &Path,
 ) -> Result<Box<dyn CacheWriter>> {
-    let _ = (shot, meta, dir);
-    Err(Error::bake(
-        "the preview writer is not available in this build",
-    ))
+    Ok(Box::new(preview::PreviewWriter::create(shot, meta, dir)?))
 }
 
 /// Opens the writer for one format in `dir`.

@@ -30,7 +30,7 @@ mod bee;
 mod text;
 
 use super::CacheWriter;
-use super::atomic::{AtomicFile, ScratchFile};
+use super::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame, SwarmFrame};
 use glam::Vec3;
@@ -597,7 +597,7 @@ impl UsdaWriter {
         )
     }
 
-    fn finish_single(mut self) -> Result<Vec<PathBuf>> {
+    fn finish_single(mut self) -> Result<Vec<SealedFile>> {
         let mut chunk = self.chunk.take().expect("at least one frame was written");
         let mut file = AtomicFile::create(&self.dest)?;
         let path = self.dest.clone();
@@ -633,14 +633,13 @@ impl UsdaWriter {
         }
         file.writer().write_all(b"}\n\n").map_err(io(&path))?;
         drop(chunk);
-        let main = file.commit()?;
-        // A previous bake of this shot in clips mode left clip layers that nothing
-        // references any more.
-        remove_stale_clips(&self.clips_dir, &self.meta.shot_name, &[]);
-        Ok(vec![main])
+        // A previous bake of this shot in clips mode left clip layers that nothing will
+        // reference any more once this layer is in place.
+        let stale = stale_clips(&self.clips_dir, &self.meta.shot_name, &[]);
+        Ok(vec![file.seal()?.remove_after_commit(stale)])
     }
 
-    fn finish_clips(mut self) -> Result<Vec<PathBuf>> {
+    fn finish_clips(mut self) -> Result<Vec<SealedFile>> {
         let chunk = self.chunk.take().expect("at least one frame was written");
         self.close_chunk(chunk)?;
         let manifest_dest = self
@@ -730,19 +729,18 @@ impl UsdaWriter {
         }
         main.writer().write_all(b"}\n\n").map_err(io(&path))?;
 
-        // Commit the layers the main one depends on first, so that the main layer never
-        // names a clip that is not in place.
+        // The layers the main one depends on are committed first, so that the main layer
+        // never names a clip that is not in place.
+        let mut sealed = Vec::new();
         let mut written = Vec::new();
         for c in std::mem::take(&mut self.clips) {
-            std::fs::rename(&c.scratch.path, &c.dest).map_err(io(&c.dest))?;
-            written.push(c.dest);
+            written.push(c.dest.clone());
+            sealed.push(c.scratch.seal_as(c.dest)?);
         }
-        let manifest = manifest.commit()?;
-        let main = main.commit()?;
-        remove_stale_clips(&self.clips_dir, &self.meta.shot_name, &written);
-        let mut out = vec![main, manifest];
-        out.extend(written);
-        Ok(out)
+        sealed.push(manifest.seal()?);
+        let stale = stale_clips(&self.clips_dir, &self.meta.shot_name, &written);
+        sealed.push(main.seal()?.remove_after_commit(stale));
+        Ok(sealed)
     }
 }
 
@@ -774,11 +772,13 @@ fn clip_file_name(shot: &str, index: usize, count: usize) -> String {
     format!("{shot}.{:0width$}.usda", index + 1)
 }
 
-/// Removes clip layers of an earlier bake of this shot that the new cache does not use:
-/// only files named exactly as this writer names them, and the folder if then empty.
-fn remove_stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) {
+/// Clip layers of an earlier bake of this shot that the new cache does not use: only
+/// files named exactly as this writer names them. They are removed (and their folder, if
+/// then empty) once the new main layer is in place.
+fn stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) -> Vec<PathBuf> {
+    let mut stale_files = Vec::new();
     let Ok(entries) = std::fs::read_dir(clips_dir) else {
-        return;
+        return stale_files;
     };
     let prefix = format!("{shot}.");
     for e in entries.flatten() {
@@ -799,10 +799,10 @@ fn remove_stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) {
                 && !keep.contains(&path)
         };
         if stale {
-            let _ = std::fs::remove_file(&path);
+            stale_files.push(path);
         }
     }
-    let _ = std::fs::remove_dir(clips_dir); // only succeeds when empty
+    stale_files
 }
 
 /// One mesh prim of the prototype.
@@ -898,7 +898,7 @@ impl CacheWriter for UsdaWriter {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> Result<Vec<PathBuf>> {
+    fn finish(self: Box<Self>) -> Result<Vec<SealedFile>> {
         if self.next_frame != self.meta.frame_end + 1 {
             return Err(Error::bake(format!(
                 "USDA writer: finished after frame {} of {}-{}",
@@ -995,7 +995,7 @@ mod tests {
                 swarms: &swarms,
             })?;
         }
-        w.finish()
+        crate::export::atomic::commit_all(w.finish()?)
     }
 
     fn files(dir: &Path) -> Vec<String> {
@@ -1115,7 +1115,7 @@ mod tests {
             swarms: std::slice::from_ref(&s),
         })
         .unwrap();
-        Box::new(w).finish().unwrap();
+        crate::export::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
         let t = std::fs::read_to_string(&path).unwrap();
         // (w, x, y, z): identity, then 90° about +Y = (0.7071, 0, 0.7071, 0) in half.
         assert!(t.contains("quath[] orientations.timeSamples = {\n            0: [(1, 0, 0, 0), (0.707, 0, 0.707, 0)],\n"));

@@ -71,6 +71,19 @@ impl Neighbours {
     }
 }
 
+/// What other bees' neighbour loops read of a bee, packed in 40 bytes so that those
+/// loops touch less memory than the whole state would take.
+#[derive(Clone, Copy, Debug, Default)]
+struct Hot {
+    pos: Vec3,
+    /// Capsule radius, m (the swarm's radius times the bee's size).
+    radius: f32,
+    vel: Vec3,
+    mass: f32,
+    density: f32,
+    pressure: f32,
+}
+
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
 struct Bee {
@@ -153,6 +166,7 @@ pub struct Simulation {
     bees: Vec<Bee>,
     next: Vec<Bee>,
     neighbours: Vec<Neighbours>,
+    hot: Vec<Hot>,
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
@@ -316,6 +330,7 @@ impl Simulation {
             targets,
             next: bees.clone(),
             neighbours: Vec::new(),
+            hot: Vec::new(),
             bees,
             positions: Vec::new(),
             grid: Grid::default(),
@@ -414,6 +429,19 @@ impl Simulation {
         self.positions.clear();
         self.positions.extend(self.bees.iter().map(|b| b.pos));
         self.grid.build(&self.positions, self.grid_cell);
+        let swarms = &self.swarms;
+        self.hot.clear();
+        self.hot.extend(self.bees.iter().map(|b| {
+            let s = &swarms[b.swarm as usize];
+            Hot {
+                pos: b.pos,
+                radius: s.radius * b.size,
+                vel: b.vel,
+                mass: s.mass,
+                density: 0.0,
+                pressure: 0.0,
+            }
+        }));
 
         // Pass 1: neighbours, and density and pressure (Eq. 10) for bees of the bee model.
         let densities: Vec<(f32, f32, Neighbours)> = (0..self.bees.len())
@@ -422,9 +450,11 @@ impl Simulation {
             .map(|i| self.density(i))
             .collect();
         self.neighbours.clear();
-        for (b, (d, p, n)) in self.bees.iter_mut().zip(densities) {
+        for ((b, h), (d, p, n)) in self.bees.iter_mut().zip(self.hot.iter_mut()).zip(densities) {
             b.density = d;
             b.pressure = p;
+            h.density = d;
+            h.pressure = p;
             self.neighbours.push(n);
         }
         // Pass 2: forces and integration.
@@ -454,7 +484,7 @@ impl Simulation {
             });
         } else {
             for &j in &n.idx[..n.len as usize] {
-                let pj = self.bees[j as usize].pos;
+                let pj = self.hot[j as usize].pos;
                 f(j as usize, pj, p.distance_squared(pj));
             }
         }
@@ -473,14 +503,8 @@ impl Simulation {
                 list.push(j);
             }
             if bee_model {
-                let o = &self.bees[j];
-                let so = &self.swarms[o.swarm as usize];
-                rho += repulsion::density_term(
-                    &s.kernels,
-                    so.mass,
-                    d2.sqrt(),
-                    ri + so.radius * o.size,
-                );
+                let o = &self.hot[j];
+                rho += repulsion::density_term(&s.kernels, o.mass, d2.sqrt(), ri + o.radius);
             }
         });
         if !bee_model {
@@ -527,11 +551,10 @@ impl Simulation {
         let mut hood = boids::Neighbourhood::default();
         let reach = s.h + ri + self.max_body_radius;
         self.for_each_neighbour(i, reach, |j, pj, d2| {
-            let o = &self.bees[j];
+            let o = &self.hot[j];
             let r = b.pos - pj;
-            let so = &self.swarms[o.swarm as usize];
             let dist = d2.sqrt();
-            let contact = ri + so.radius * o.size;
+            let contact = ri + o.radius;
             let fallback = || Self::separation_fallback(i, j);
             match s.model {
                 ModelKind::Bee => {
@@ -541,7 +564,7 @@ impl Simulation {
                         b.density
                     };
                     a_rep += repulsion::pressure_term(
-                        &s.kernels, r, dist, contact, so.mass, b.pressure, o.pressure, b.density,
+                        &s.kernels, r, dist, contact, o.mass, b.pressure, o.pressure, b.density,
                         rho_j, fallback,
                     );
                 }
