@@ -359,15 +359,16 @@ def usd_instances(name, frame):
     vel = np.zeros(n * 3, np.float32)
     geo.attributes["velocity"].data.foreach_get("vector", vel)
     vel = vel.reshape(n, 3)
-    local = np.zeros(n * 3, np.float32)  # the instances' translations, instancer space
-    geo.attributes["position"].data.foreach_get("vector", local)
-    world = inst.evaluated_get(dg).matrix_world
-    positions = [world @ Vector(p) for p in local.reshape(n, 3)]
-    # Every prototype object of every instance is drawn: (body, wings…) × bees.
-    drawn = [i for i in dg.object_instances if i.is_instance and i.parent
-             and i.parent.original == inst]
-    assert len(drawn) % n == 0 and drawn
-    return {int(i): (p, v) for i, p, v in zip(ids, positions, vel)}
+    # Instance positions from the depsgraph (the instances' own "position" attribute is a
+    # virtual one that reads back unreliably): the prototype's root object (no parent) once
+    # per instance. Its persistent id is the instance's `id` attribute: the bee's id.
+    positions = {}
+    for i in dg.object_instances:
+        if i.is_instance and i.parent and i.parent.original == inst and \
+                i.object.original.parent is None:
+            positions[i.persistent_id[1]] = i.matrix_world.translation.copy()
+    assert sorted(positions) == sorted(int(b) for b in ids)
+    return {int(b): (positions[int(b)], v) for b, v in zip(ids, vel)}
 
 
 def check_swarm_against_csv(name, count, get_positions, tracks, frames):
@@ -628,12 +629,12 @@ class ProbeEngine(bpy.types.RenderEngine):
                 ip.attributes["velocity"].data.foreach_get("vector", v)
                 ids = np.zeros(n, np.int32)
                 ip.attributes["id"].data.foreach_get("value", ids)
-                # One prototype object per bee (the stand-in's prototype is one cube).
-                drawn = [(i.object.original.name, tuple(i.matrix_world.translation))
-                         for i in depsgraph.object_instances
-                         if i.is_instance and i.parent and i.parent.name == ob.name]
-                pos = [p for name, p in drawn if name == drawn[0][0]]
-                ProbeEngine.seen[key] = (ids, v.reshape(n, 3), np.array(pos))
+                # The prototype's root object, once per bee, by persistent id (= bee id).
+                pos = {i.persistent_id[1]: tuple(i.matrix_world.translation)
+                       for i in depsgraph.object_instances
+                       if i.is_instance and i.parent and i.parent.name == ob.name
+                       and i.object.original.parent is None}
+                ProbeEngine.seen[key] = (ids, v.reshape(n, 3), pos)
 
     def render(self, depsgraph):
         f = depsgraph.scene.frame_current
@@ -663,14 +664,14 @@ def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
         bpy.utils.unregister_class(ProbeEngine)
     for key in (7.0, 7.5):
         ids, vel, pos = ProbeEngine.seen[key]
-        assert sorted(ids) == sorted(tracks) and len(pos) == 12
+        assert sorted(ids) == sorted(tracks) == sorted(pos)
         for k, bee in enumerate(ids):
             a, b = tracks[int(bee)][7], tracks[int(bee)][8]
             t = key - 7
             want_v = [(1 - t) * a[c] + t * b[c] for c in ("vx", "vy", "vz")]
             want_p = blender_from_shot([(1 - t) * a[c] + t * b[c] for c in ("x", "y", "z")])
             assert np.allclose(vel[k], want_v, atol=1e-5)
-            assert (Vector(pos[k]) - want_p).length < TOL
+            assert (Vector(pos[int(bee)]) - want_p).length < TOL
 
 
 def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path):
