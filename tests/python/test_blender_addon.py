@@ -865,3 +865,14 @@ def test_write_shot_file_operator(scene, beeswarm_bin, tmp_path):
     with pytest.raises(RuntimeError, match="not written by the add-on"):
         bpy.ops.beeswarm.write_shot(filepath=str(other))
     assert other.read_text() == "[scene]\n"
+
+
+def test_no_obstacles_and_no_collections_is_fine(scene, beeswarm_bin, tmp_path):
+    scene.beeswarm.obstacles = None
+    scene.beeswarm.targets = None
+    shot, warnings = shot_builder.build_shot(scene, scene.beeswarm)
+    assert "obstacle" not in shot and "target" not in shot and not warnings
+    path = tmp_path / "bare.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot))
+    r = subprocess.run([beeswarm_bin, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
