@@ -9,7 +9,6 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 
 
 class BakeProcess:
@@ -179,4 +178,3 @@ if __name__ == "__main__":  # a manual check: python runner.py BINARY SHOT OUT
             if ev[0] == "exit":
                 break
     print(p.stderr)
-    time.sleep(0)

@@ -17,7 +17,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy", reason="bpy (Blender as a module) is not installed")
 import numpy as np  # noqa: E402  (bpy brings numpy)
-from mathutils import Euler, Matrix, Vector  # noqa: E402
+from mathutils import Euler, Vector  # noqa: E402
 
 from conftest import ROOT, read_tracks  # noqa: E402
 
@@ -138,7 +138,7 @@ def test_rotated_scaled_cylinder_and_box_convert_to_shot_axes(scene):
     box = add_primitive("cube", "Obstacles", size=2.0, location=(-1.0, 0.5, 0.25),
                         rotation=(math.radians(10), math.radians(80), math.radians(-120)))
     box.scale = (0.3, 1.2, 0.7)
-    ball = add_primitive("uv_sphere", "Obstacles", radius=0.25, location=(0.0, -2.0, 0.5))
+    add_primitive("uv_sphere", "Obstacles", radius=0.25, location=(0.0, -2.0, 0.5))
     bpy.context.view_layer.update()
     shot, warnings = shot_builder.build_shot(scene, scene.beeswarm)
     doc = tomllib.loads(shot_builder.shot_toml(shot))
