@@ -11,7 +11,7 @@ use crate::math::{self, Rng, normalize_or};
 use crate::model::kernels::Kernels;
 use crate::model::{boids, brownian, collision, oscillation, repulsion, targets, vision};
 use crate::shot::{ModelKind, Region, Shot, TargetKind};
-use glam::{Quat, Vec2, Vec3};
+use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
 /// Time constants of the body's attitude, seconds: how fast the heading follows the
@@ -91,15 +91,14 @@ struct Bee {
     vel: Vec3,
     /// Exponentially smoothed path; sway is the lateral offset from it.
     mean_pos: Vec3,
-    /// Heading: the horizontal unit vector the body points along, as (x, z). Kept as a
-    /// vector so a step needs no trigonometry; the angle is only formed when recorded.
-    heading: Vec2,
+    /// Heading about +Y, radians.
+    yaw: f32,
     pitch_deg: f32,
     roll_deg: f32,
-    /// Attitude (heading, pitch deg, roll deg) one substep earlier: the recorded angular
+    /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
     /// velocity is the rotation between the two attitudes over that substep. Quaternions
     /// are only built when a frame is recorded.
-    prev_attitude: (Vec2, f32, f32),
+    prev_attitude: (f32, f32, f32),
     density: f32,
     pressure: f32,
     swarm: u32,
@@ -111,33 +110,17 @@ struct Bee {
     phase_roll: f32,
 }
 
-/// Heading angle about +Y of a heading vector (x, z).
-fn yaw(h: Vec2) -> f32 {
-    (-h.y).atan2(h.x)
-}
-
-/// The heading frame's forward (+X) and right (+Z) axes in the world.
-#[inline]
-fn heading_axes(h: Vec2) -> (Vec3, Vec3) {
-    (Vec3::new(h.x, 0.0, h.y), Vec3::new(-h.y, 0.0, h.x))
-}
-
-/// Unit heading vector of a horizontal direction, or `fallback` when there is none.
-fn heading_of(v: Vec3, fallback: Vec2) -> Vec2 {
-    Vec2::new(v.x, v.z).try_normalize().unwrap_or(fallback)
-}
-
 impl Bee {
     fn orientation(&self) -> Quat {
         math::body_orientation(
-            yaw(self.heading),
+            self.yaw,
             self.pitch_deg.to_radians(),
             self.roll_deg.to_radians(),
         )
     }
     fn prev_orientation(&self) -> Quat {
-        let (h, p, r) = self.prev_attitude;
-        math::body_orientation(yaw(h), p.to_radians(), r.to_radians())
+        let (y, p, r) = self.prev_attitude;
+        math::body_orientation(y, p.to_radians(), r.to_radians())
     }
 }
 
@@ -311,7 +294,7 @@ impl Simulation {
                     Vec3::X,
                 );
                 let vel = dir * speed;
-                let heading = heading_of(dir, Vec2::X);
+                let yaw = math::yaw_of(dir);
                 let phase_pitch = var.phase * rng.f32() * oscillation::PITCH_PERIOD as f32;
                 let phase_roll = var.phase * rng.f32() * oscillation::ROLL_PERIOD as f32;
                 let model = s.model;
@@ -326,10 +309,10 @@ impl Simulation {
                     pos,
                     vel,
                     mean_pos: pos,
-                    heading,
+                    yaw,
                     pitch_deg,
                     roll_deg,
-                    prev_attitude: (heading, pitch_deg, roll_deg),
+                    prev_attitude: (yaw, pitch_deg, roll_deg),
                     density: 0.0,
                     pressure: 0.0,
                     swarm: si as u32,
@@ -370,9 +353,9 @@ impl Simulation {
         // The heading follows the new direction of travel at once.
         let horizontal = Vec3::new(velocity.x, 0.0, velocity.z);
         if horizontal.length() > 0.02 {
-            b.heading = heading_of(horizontal, b.heading);
+            b.yaw = math::yaw_of(horizontal);
         }
-        b.prev_attitude = (b.heading, b.pitch_deg, b.roll_deg);
+        b.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
         self.update_record();
     }
 
@@ -639,7 +622,7 @@ impl Simulation {
 
         // Model-specific acceleration.
         let air = b.vel - wind;
-        let (fwd, right) = heading_axes(b.heading);
+        let heading = Quat::from_rotation_y(b.yaw);
         let mut gamma = 1.0f32;
         let a = match s.model {
             ModelKind::Bee => {
@@ -647,12 +630,8 @@ impl Simulation {
                 out.pitch_deg = oscillation::pitch_deg(tt + b.phase_pitch as f64);
                 let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
                 // Vision (Sec. IV-B): the nearest obstacle seen within d0 takes over the roll.
-                let forward = if shot.obstacles.is_empty() {
-                    fwd
-                } else {
-                    let (sp, cp) = out.pitch_deg.to_radians().sin_cos();
-                    fwd * cp + Vec3::Y * sp
-                };
+                let forward =
+                    heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
                 let mut nearest = f32::INFINITY;
                 for o in &shot.obstacles {
                     let q = obstacle::query(&o.shape, b.pos);
@@ -674,7 +653,7 @@ impl Simulation {
                     s.wing_area,
                     s.mean_cl,
                 );
-                let a_o = fwd * f_o.x + Vec3::Y * f_o.y + right * f_o.z;
+                let a_o = heading * f_o;
                 // Linear drag sized so that mean thrust balances at the preferred speed.
                 let drag = s.k1 * oscillation::mean_thrust_accel() / b.speed.max(1e-3);
                 // Eq. 1, plus the terms the paper leaves implicit (docs/model.md). While
@@ -720,19 +699,16 @@ impl Simulation {
         out.pos = pos;
         out.vel = vel;
 
-        let horizontal = Vec2::new(vel.x, vel.z);
+        let horizontal = Vec3::new(vel.x, 0.0, vel.z);
         if horizontal.length() > 0.02 {
-            let mut target = horizontal.normalize();
-            // Turning right round: pick a side, or the blend below would never turn.
-            if target.dot(b.heading) < -0.999 {
-                target = b.heading.perp();
-            }
-            out.heading = (b.heading + (target - b.heading) * lags.yaw)
-                .try_normalize()
-                .unwrap_or(b.heading);
+            let target = math::yaw_of(horizontal);
+            let mut dy = target - b.yaw;
+            dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
+                - std::f32::consts::PI;
+            out.yaw = (b.yaw + dy * lags.yaw).rem_euclid(std::f32::consts::TAU);
         }
         out.mean_pos = b.mean_pos + (pos - b.mean_pos) * lags.sway;
-        out.prev_attitude = (b.heading, b.pitch_deg, b.roll_deg);
+        out.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
         out
     }
 
@@ -752,13 +728,10 @@ impl Simulation {
             f.velocity.clear();
             f.velocity.extend(bees.iter().map(|b| b.vel));
             f.orientation.clear();
-            f.orientation
-                .par_extend(bees.par_iter().map(|b| b.orientation()));
+            f.orientation.extend(bees.iter().map(|b| b.orientation()));
             f.heading.clear();
-            f.heading.par_extend(
-                bees.par_iter()
-                    .map(|b| Quat::from_rotation_y(yaw(b.heading))),
-            );
+            f.heading
+                .extend(bees.iter().map(|b| Quat::from_rotation_y(b.yaw)));
             f.pitch_deg.clear();
             f.pitch_deg.extend(bees.iter().map(|b| b.pitch_deg));
             f.roll_deg.clear();
@@ -766,10 +739,10 @@ impl Simulation {
             f.sway_m.clear();
             f.sway_m.extend(
                 bees.iter()
-                    .map(|b| (b.pos - b.mean_pos).dot(heading_axes(b.heading).1)),
+                    .map(|b| (b.pos - b.mean_pos).dot(Quat::from_rotation_y(b.yaw) * Vec3::Z)),
             );
             f.angular_velocity_deg.clear();
-            f.angular_velocity_deg.par_extend(bees.par_iter().map(|b| {
+            f.angular_velocity_deg.extend(bees.iter().map(|b| {
                 math::angular_velocity(b.prev_orientation(), b.orientation(), dt)
                     * (180.0 / std::f32::consts::PI)
             }));
