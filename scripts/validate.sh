@@ -3,8 +3,10 @@
 # mosquito recording, bakes each on a seed the calibration never saw, and compares all
 # three with the recording in one report and one figure.
 #
-#   scripts/validate.sh                 # full run (200 generations, about 5 minutes on 2 cores)
+#   scripts/validate.sh                 # full run (200 generations, 2–5 minutes on 2 cores)
 #   GENERATIONS=20 scripts/validate.sh  # a quick look
+#   CALIBRATE=0 scripts/validate.sh     # keep the checked-in bee preset: re-bake and
+#                                       # re-evaluate only (the baselines are refitted)
 #
 # Writes presets/mosquito_cage.toml, docs/img/mosquito_validation.png,
 # docs/img/mosquito_cage_fitness.png, docs/validation_table.md and out/validation/*.
@@ -15,6 +17,7 @@ REAL=${REAL:-$ROOT/../shared/data/mosquito_flights.csv}
 GENERATIONS=${GENERATIONS:-200}
 BASELINE_GENERATIONS=${BASELINE_GENERATIONS:-30}
 GA_SEED=${GA_SEED:-1}
+CALIBRATE=${CALIBRATE:-1}
 SEEDS=${SEEDS:-2}              # simulation runs pooled per individual
 EVAL_SEED=${EVAL_SEED:-2026}   # calibration uses the shot's seeds 11, 12
 OUT=out/validation
@@ -40,10 +43,12 @@ variant() { # model preset > shot
 #    Γ = {κ1, κ2, κ3, L, ε, h} and the speed, the baselines (which read only the speed)
 #    fit the speed.
 variant bee nest > "$OUT/calibrate_bee.toml"
-"$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_bee.toml" \
-    --out presets/mosquito_cage.toml --name mosquito_cage \
-    --generations "$GENERATIONS" --population 10 --seed "$GA_SEED" --seeds "$SEEDS" \
-    --figure docs/img/mosquito_cage_fitness.png --progress bar
+if [ "$CALIBRATE" != 0 ]; then
+    "$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_bee.toml" \
+        --out presets/mosquito_cage.toml --name mosquito_cage \
+        --generations "$GENERATIONS" --population 10 --seed "$GA_SEED" --seeds "$SEEDS" \
+        --figure docs/img/mosquito_cage_fitness.png --progress bar
+fi
 for m in brownian boids; do
     variant "$m" nest > "$OUT/calibrate_$m.toml"
     "$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_$m.toml" \
