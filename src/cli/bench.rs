@@ -29,19 +29,33 @@ pub struct BenchArgs {
     /// Preset to measure.
     #[arg(long, default_value = "nest")]
     pub preset: String,
+    /// Add a nest that draws every bee into one cloud (density then grows with the count).
+    #[arg(long)]
+    pub nest: bool,
 }
 
-/// A swarm at a constant density of 500 bees per cubic metre around a nest, so that the
+/// A swarm at a constant density of 500 bees per cubic metre (soft bounds on the spawn box), so that the
 /// work per bee stays the same as the count grows.
 pub fn bench_shot(
     bees: usize,
     frames: usize,
     substeps: u32,
     preset: &str,
+    nest: bool,
 ) -> std::result::Result<Shot, crate::error::ShotError> {
     let side = (bees as f64 / 500.0).cbrt().max(0.5);
+    // Soft bounds on the spawn box keep the density constant as the count grows; a nest
+    // pulls every bee into one ever denser cloud instead.
+    let target = if nest {
+        format!(
+            "\n[[target]]\ntype = \"nest\"\nposition = [0, {}, 0]\n",
+            side / 2.0 + 0.5
+        )
+    } else {
+        String::new()
+    };
     let src = format!(
-        "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\npreset = \"{preset}\"\nspawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n\n[[target]]\ntype = \"nest\"\nposition = [0, {c}, 0]\n",
+        "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\npreset = \"{preset}\"\nspawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\nbounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n{target}",
         frames + 1,
         c = side / 2.0 + 0.5
     );
@@ -52,7 +66,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if a.bees == 0 || a.frames == 0 {
         return Err(Error::input("--bees and --frames must be at least 1"));
     }
-    let shot = bench_shot(a.bees, a.frames, a.substeps, &a.preset).map_err(|e| {
+    let shot = bench_shot(a.bees, a.frames, a.substeps, &a.preset, a.nest).map_err(|e| {
         // The shot is generated from the options: name the option, not the hidden text.
         let option = match e.key.as_str() {
             "scene.substeps" => "--substeps",
@@ -85,6 +99,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
             "substeps": a.substeps,
             "threads": threads,
             "preset": a.preset,
+            "scene": if a.nest { "nest: every bee drawn to one nest" } else { "constant density: 500 bees/m³ in soft bounds" },
             "seconds": (seconds * 1000.0).round() / 1000.0,
             "bee_steps_per_s": (steps / seconds).round(),
             "bee_frames_per_s": ((a.bees * a.frames) as f64 / seconds).round(),
