@@ -166,6 +166,7 @@ pub struct Simulation {
     bees: Vec<Bee>,
     next: Vec<Bee>,
     neighbours: Vec<Neighbours>,
+    densities: Vec<(f32, f32)>,
     hot: Vec<Hot>,
     positions: Vec<Vec3>,
     grid: Grid,
@@ -330,6 +331,7 @@ impl Simulation {
             targets,
             next: bees.clone(),
             neighbours: Vec::new(),
+            densities: Vec::new(),
             hot: Vec::new(),
             bees,
             positions: Vec::new(),
@@ -425,6 +427,9 @@ impl Simulation {
 
     /// One integration step of `dt` seconds starting at time `t`.
     fn step(&mut self, t: f64, dt: f32) {
+        if self.bees.is_empty() {
+            return;
+        }
         self.update_targets(t);
         self.positions.clear();
         self.positions.extend(self.bees.iter().map(|b| b.pos));
@@ -443,28 +448,41 @@ impl Simulation {
             }
         }));
 
-        // Pass 1: neighbours, and density and pressure (Eq. 10) for bees of the bee model.
-        let densities: Vec<(f32, f32, Neighbours)> = (0..self.bees.len())
-            .into_par_iter()
+        // Pass 1: neighbours, and density and pressure (Eq. 10) for bees of the bee model,
+        // written in place (no per-step allocation).
+        let n = self.bees.len();
+        let mut neighbours = std::mem::take(&mut self.neighbours);
+        neighbours.resize(n, Neighbours::default());
+        let mut densities = std::mem::take(&mut self.densities);
+        densities.resize(n, (0.0, 0.0));
+        neighbours
+            .par_iter_mut()
+            .zip(densities.par_iter_mut())
+            .enumerate()
             .with_min_len(256)
-            .map(|i| self.density(i))
-            .collect();
-        self.neighbours.clear();
-        for ((b, h), (d, p, n)) in self.bees.iter_mut().zip(self.hot.iter_mut()).zip(densities) {
+            .for_each(|(i, (list, d))| *d = self.density(i, list));
+        for ((b, h), &(d, p)) in self
+            .bees
+            .iter_mut()
+            .zip(self.hot.iter_mut())
+            .zip(&densities)
+        {
             b.density = d;
             b.pressure = p;
             h.density = d;
             h.pressure = p;
-            self.neighbours.push(n);
         }
-        // Pass 2: forces and integration.
+        self.neighbours = neighbours;
+        self.densities = densities;
+        // Pass 2: forces and integration into the second state buffer.
         let step_index = self.step_index;
         let lags = Lags::new(dt);
-        let next: Vec<Bee> = (0..self.bees.len())
-            .into_par_iter()
+        let mut next = std::mem::take(&mut self.next);
+        next.resize(n, self.bees[0]);
+        next.par_iter_mut()
+            .enumerate()
             .with_min_len(128)
-            .map(|i| self.integrate(i, t, dt, &lags, step_index))
-            .collect();
+            .for_each(|(i, out)| *out = self.integrate(i, t, dt, &lags, step_index));
         self.next = next;
         std::mem::swap(&mut self.bees, &mut self.next);
         self.step_index += 1;
@@ -490,14 +508,16 @@ impl Simulation {
         }
     }
 
-    fn density(&self, i: usize) -> (f32, f32, Neighbours) {
+    /// Density and pressure of bee i; fills `list` with its neighbours.
+    fn density(&self, i: usize, list: &mut Neighbours) -> (f32, f32) {
         let b = &self.bees[i];
         let s = &self.swarms[b.swarm as usize];
         let ri = s.radius * b.size;
         let reach = s.h + ri + self.max_body_radius;
         let bee_model = s.model == ModelKind::Bee;
         let mut rho = 0.0;
-        let mut list = Neighbours::default();
+        list.len = 0;
+        list.overflow = false;
         self.grid.for_each_within(b.pos, reach, |j, _, d2| {
             if j != i {
                 list.push(j);
@@ -508,7 +528,7 @@ impl Simulation {
             }
         });
         if !bee_model {
-            return (0.0, 0.0, list);
+            return (0.0, 0.0);
         }
         for &ti in &s.targets {
             let tr = &self.targets[ti];
@@ -524,11 +544,7 @@ impl Simulation {
                 );
             }
         }
-        (
-            rho,
-            repulsion::pressure(s.stiffness, rho, s.rest_density),
-            list,
-        )
+        (rho, repulsion::pressure(s.stiffness, rho, s.rest_density))
     }
 
     /// A deterministic direction separating coincident bees i and j (opposite for j and i).
