@@ -12,6 +12,9 @@ use std::time::Instant;
 /// temporary files, leaving any previous cache untouched.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
+const INTERRUPTED_MESSAGE: &str =
+    "interrupted: no cache was written; the previous cache is untouched";
+
 /// Progress of a bake, reported after every frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
@@ -83,7 +86,7 @@ pub fn bake(
 ) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
     let start = Instant::now();
-    let mut sim = with_threads(opts.threads, || Simulation::new(shot))?;
+    let mut sim = Simulation::new(shot);
     let meta = sim.meta();
     let mut writers: Vec<Box<dyn CacheWriter>> = Vec::new();
     for &f in opts.formats {
@@ -127,9 +130,7 @@ pub fn bake(
                     }
                 }
             }
-            Err(Error::bake(
-                "interrupted: no cache was written; the previous cache is untouched",
-            ))
+            Err(Error::bake(INTERRUPTED_MESSAGE))
         });
         let simulated = with_threads(opts.threads, || -> Result<()> {
             for done in 1..=total {
@@ -137,9 +138,7 @@ pub fn bake(
                     sim.advance();
                 }
                 if INTERRUPTED.load(Ordering::Relaxed) {
-                    return Err(Error::bake(
-                        "interrupted: no cache was written; the previous cache is untouched",
-                    ));
+                    return Err(Error::bake(INTERRUPTED_MESSAGE));
                 }
                 let msg = Message::Frame {
                     frame: sim.frame(),

@@ -99,8 +99,6 @@ struct Bee {
     /// velocity is the rotation between the two attitudes over that substep. Quaternions
     /// are only built when a frame is recorded.
     prev_attitude: (f32, f32, f32),
-    density: f32,
-    pressure: f32,
     swarm: u32,
     /// Body scale and preferred speed (per-bee variation), oscillation phases in the
     /// maneuvering functions' own time units.
@@ -314,8 +312,6 @@ impl Simulation {
                     pitch_deg,
                     roll_deg,
                     prev_attitude: (yaw, pitch_deg, roll_deg),
-                    density: 0.0,
-                    pressure: 0.0,
                     swarm: si as u32,
                     size,
                     speed,
@@ -461,14 +457,7 @@ impl Simulation {
             .enumerate()
             .with_min_len(256)
             .for_each(|(i, (list, d))| *d = self.density(i, list));
-        for ((b, h), &(d, p)) in self
-            .bees
-            .iter_mut()
-            .zip(self.hot.iter_mut())
-            .zip(&densities)
-        {
-            b.density = d;
-            b.pressure = p;
+        for (h, &(d, p)) in self.hot.iter_mut().zip(&densities) {
             h.density = d;
             h.pressure = p;
         }
@@ -559,6 +548,7 @@ impl Simulation {
         let shot = &self.shot;
         let wind = shot.wind;
         let ri = s.radius * b.size;
+        let (density, pressure) = (self.hot[i].density, self.hot[i].pressure);
         let mut out = b;
 
         // Neighbours: pressure repulsion (Eq. 11), contact springs (Sec. VII), boids rules.
@@ -574,14 +564,10 @@ impl Simulation {
             let fallback = || Self::separation_fallback(i, j);
             match s.model {
                 ModelKind::Bee => {
-                    let rho_j = if o.density > 0.0 {
-                        o.density
-                    } else {
-                        b.density
-                    };
+                    let rho_j = if o.density > 0.0 { o.density } else { density };
                     a_rep += repulsion::pressure_term(
-                        &s.kernels, r, dist, contact, o.mass, b.pressure, o.pressure, b.density,
-                        rho_j, fallback,
+                        &s.kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j,
+                        fallback,
                     );
                 }
                 ModelKind::Boids => {
@@ -623,9 +609,9 @@ impl Simulation {
                         dist,
                         ri,
                         s.mass,
-                        b.pressure,
-                        b.pressure,
-                        b.density,
+                        pressure,
+                        pressure,
+                        density,
                         s.rest_density,
                         || normalize_or(*off, Vec3::Y),
                     );
@@ -755,13 +741,15 @@ impl Simulation {
             f.sway_m.clear();
             f.sway_m.extend(
                 bees.iter()
-                    .map(|b| (b.pos - b.mean_pos).dot(Quat::from_rotation_y(b.yaw) * Vec3::Z)),
+                    .zip(&f.heading)
+                    .map(|(b, h)| (b.pos - b.mean_pos).dot(*h * Vec3::Z)),
             );
             f.angular_velocity_deg.clear();
-            f.angular_velocity_deg.extend(bees.iter().map(|b| {
-                math::angular_velocity(b.prev_orientation(), b.orientation(), dt)
-                    * (180.0 / std::f32::consts::PI)
-            }));
+            f.angular_velocity_deg
+                .extend(bees.iter().zip(&f.orientation).map(|(b, q)| {
+                    math::angular_velocity(b.prev_orientation(), *q, dt)
+                        * (180.0 / std::f32::consts::PI)
+                }));
             f.scale.clear();
             f.scale.extend(bees.iter().map(|b| b.size));
             id += s.count as u64;
