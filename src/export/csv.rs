@@ -73,11 +73,9 @@ impl CacheWriter for CsvWriter {
                     push_f32(l, x);
                 }
                 l.push(b'\n');
-                let path = self.file.dest().to_path_buf();
-                self.file
-                    .writer()
-                    .write_all(l)
-                    .map_err(|e| Error::io(&path, e))?;
+                if let Err(e) = self.file.writer().write_all(&self.line) {
+                    return Err(Error::io(self.file.dest(), e));
+                }
             }
         }
         Ok(())
