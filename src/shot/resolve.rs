@@ -41,6 +41,32 @@ impl Ctx<'_> {
         e
     }
 
+    /// Deserializes the whole text. A TOML or type error is located (line, column, key)
+    /// with a hint for a misspelt key; a `nan` or `inf` anywhere is refused too.
+    fn deserialize<T: serde::de::DeserializeOwned>(&self, src: &str) -> Result<T, ShotError> {
+        let value: T = toml::from_str(src).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            let (line, column, source_line) = self.loc.line_col(span.start);
+            let message = friendly(e.message());
+            let hint = message
+                .starts_with("unknown field")
+                .then(|| unknown_field_hint(&message));
+            ShotError {
+                file: self.file.to_path_buf(),
+                line,
+                column,
+                key: self.loc.path_at(span.start).unwrap_or_default(),
+                message,
+                source_line: Some(source_line),
+                hint,
+            }
+        })?;
+        if let Some((p, v)) = self.loc.non_finite.first() {
+            return Err(self.err(p, format!("expected a finite number, found {v}")));
+        }
+        Ok(value)
+    }
+
     /// A number that must lie in [lo, hi].
     fn range(&self, path: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, ShotError> {
         if v.is_finite() && v >= lo && v <= hi {
@@ -189,33 +215,13 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         file,
         loc: Locator::new(src),
     };
-    let raw: RawShot = match toml::from_str(src) {
-        Ok(r) => r,
-        Err(e) => {
-            let span = e.span().unwrap_or(0..0);
-            let key = cx.loc.path_at(span.start).unwrap_or_default();
-            let (line, column, source_line) = cx.loc.line_col(span.start);
-            let mut message = friendly(e.message());
-            let mut hint = None;
-            if message.starts_with("unknown field") {
-                hint = Some(unknown_field_hint(&message));
-            } else if key.is_empty() && !message.contains("missing field") {
-                message = format!("not valid TOML: {message}");
-            }
-            return Err(ShotError {
-                file: file.to_path_buf(),
-                line,
-                column,
-                key,
-                message,
-                source_line: Some(source_line),
-                hint,
-            });
+    let raw: RawShot = cx.deserialize(src).map_err(|mut e| {
+        // A syntax error has no key: say plainly the text is not TOML.
+        if e.hint.is_none() && e.key.is_empty() && !e.message.contains("missing field") {
+            e.message = format!("not valid TOML: {}", e.message);
         }
-    };
-    if let Some((p, v)) = cx.loc.non_finite.first() {
-        return Err(cx.err(p, format!("expected a finite number, found {v}")));
-    }
+        e
+    })?;
 
     // [scene]
     let scene = raw.scene.clone().unwrap_or_default();
@@ -467,35 +473,17 @@ pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
         file: path,
         loc: Locator::new(&src),
     };
-    let raw: RawPresetFile = toml::from_str(&src).map_err(|e| {
-        let span = e.span().unwrap_or(0..0);
-        let (line, column, source_line) = cx.loc.line_col(span.start);
-        let mut message = friendly(e.message());
-        let mut hint = None;
-        let mut key = cx.loc.path_at(span.start).unwrap_or_default();
-        if message.starts_with("unknown field") {
-            hint = Some(unknown_field_hint(&message));
-        } else if message == "missing field `preset`" {
-            key = "preset".to_owned();
-            message = "missing the [preset] table".to_owned();
-            hint = Some(
+    let raw: RawPresetFile = cx.deserialize(&src).map_err(|mut e| {
+        if e.message == "missing field `preset`" {
+            e.key = "preset".to_owned();
+            e.message = "missing the [preset] table".to_owned();
+            e.hint = Some(
                 "a preset file starts with [preset] (name, base, description, provenance), then [params]"
                     .to_owned(),
             );
         }
-        ShotError {
-            file: path.to_path_buf(),
-            line,
-            column,
-            key,
-            message,
-            source_line: Some(source_line),
-            hint,
-        }
+        e
     })?;
-    if let Some((p, v)) = cx.loc.non_finite.first() {
-        return Err(cx.err(p, format!("expected a finite number, found {v}")));
-    }
     let base = raw.preset.base.as_deref().unwrap_or(d::PRESET);
     let mut params = BeeParams::preset(base).ok_or_else(|| {
         cx.err(
