@@ -413,3 +413,61 @@ position = [0, 1, 0]
         }
     }
 }
+
+/// Speed samples (m/s, every frame of every bee) and the mean angle (degrees) between the
+/// body's horizontal heading and the horizontal velocity, for a few bees flying freely
+/// with curl noise and the given parameter overrides.
+fn free_flight(params: &str) -> (Vec<f32>, f32) {
+    let src = format!(
+        "[scene]\nfps = 50\nframes = [1, 1000]\nseed = 5\n[[swarm]]\ncount = 8\nvariation = {{ speed = 0 }}\nbounds = {{ center = [0, 1, 0], size = [6, 6, 6] }}\nparams = {{ speed = 0.5, {params} }}\nspawn = {{ shape = \"box\", center = [0, 1, 0], size = [2, 2, 2] }}\n"
+    );
+    let (mut speeds, mut angle, mut n) = (Vec::new(), 0.0f32, 0);
+    run_with(Simulation::new(&shot(&src)), |sim| {
+        let s = &sim.record()[0];
+        for (v, q) in s.velocity.iter().zip(&s.orientation) {
+            speeds.push(v.length());
+            let f = *q * Vec3::X;
+            let (f, v) = (Vec3::new(f.x, 0.0, f.z), Vec3::new(v.x, 0.0, v.z));
+            if v.length() > 0.05 && f.length() > 1e-3 {
+                angle += f.angle_between(v).to_degrees();
+                n += 1;
+            }
+        }
+    });
+    (speeds, angle / n.max(1) as f32)
+}
+
+fn mean_and_cv(x: &[f32]) -> (f32, f32) {
+    let m = x.iter().sum::<f32>() / x.len() as f32;
+    let var = x.iter().map(|v| (v - m) * (v - m)).sum::<f32>() / x.len() as f32;
+    (m, var.sqrt() / m)
+}
+
+#[test]
+fn speed_wander_widens_the_speed_distribution_around_the_same_mean() {
+    let (steady, _) = free_flight("speed_wander = 0.0");
+    let (wander, _) = free_flight("speed_wander = 0.6, speed_wander_time = 0.5");
+    let (m0, cv0) = mean_and_cv(&steady);
+    let (m1, cv1) = mean_and_cv(&wander);
+    println!("steady: mean {m0:.3} m/s, cv {cv0:.3}; wandering: mean {m1:.3} m/s, cv {cv1:.3}");
+    assert!(
+        cv1 > 1.5 * cv0,
+        "wandering should widen the speed spread: cv {cv1} vs {cv0}"
+    );
+    // The log-normal factor keeps the mean preferred speed.
+    assert!(
+        (m1 / m0 - 1.0).abs() < 0.25,
+        "mean speed moved too far: {m1} vs {m0}"
+    );
+}
+
+#[test]
+fn a_longer_heading_lag_lets_body_and_velocity_differ_more() {
+    let (_, quick) = free_flight("kappa2 = 3.0, heading_lag = 0.03");
+    let (_, slow) = free_flight("kappa2 = 3.0, heading_lag = 0.5");
+    println!("mean heading-velocity angle: lag 0.03 s {quick:.2}°, lag 0.5 s {slow:.2}°");
+    assert!(
+        slow > 2.0 * quick,
+        "a slow heading should trail the velocity more: {slow}° vs {quick}°"
+    );
+}

@@ -26,6 +26,14 @@ pub struct BeeParams {
     pub speed: f64,
     /// d0: distance at which a bee starts avoiding an obstacle it sees (Eq. 5–6), metres.
     pub avoid_distance: f64,
+    /// σ of the preferred speed's slow wandering over time, in natural-log units (0: a
+    /// constant preferred speed).
+    pub speed_wander: f64,
+    /// Correlation time of that wandering, seconds.
+    pub speed_wander_time: f64,
+    /// Time constant with which the body's heading follows the direction of travel,
+    /// seconds (Sec. V-A: the body and the velocity need not align).
+    pub heading_lag: f64,
     /// Half-angle of the field of view (Sec. IV-B: ±45°), degrees.
     pub fov_deg: f64,
     /// Largest roll-to-avoid angle (Eq. 6: 45°), degrees.
@@ -79,6 +87,9 @@ impl BeeParams {
             neighbour_radius: h * SCENE_UNIT_M,
             speed: 1.0,
             avoid_distance: 0.12,
+            heading_lag: 0.06,
+            speed_wander: 0.0,
+            speed_wander_time: 2.0,
             fov_deg: 45.0,
             roll_max_deg: 45.0,
             oscillation_time_unit: 0.005,

@@ -443,6 +443,19 @@ fn resolve_params(
     );
     set!(speed, 0.01, 50.0, "a speed from 0.01 to 50 m/s");
     set!(avoid_distance, 1e-3, 10.0, "a distance from 0.001 to 10 m");
+    set!(speed_wander, 0.0, 3.0, "a log-speed spread from 0 to 3");
+    set!(
+        speed_wander_time,
+        1e-2,
+        1000.0,
+        "a correlation time from 0.01 to 1000 s"
+    );
+    set!(
+        heading_lag,
+        1e-3,
+        100.0,
+        "a time constant from 0.001 to 100 s"
+    );
     set!(fov_deg, 1.0, 180.0, "a half-angle from 1 to 180 degrees");
     set!(roll_max_deg, 0.0, 90.0, "an angle from 0 to 90 degrees");
     set!(

@@ -14,16 +14,14 @@ use crate::shot::{ModelKind, Region, Shot, TargetKind};
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
-/// Time constants of the body's attitude, seconds: how fast the heading follows the
-/// velocity (a short lag lets a pushed-back bee fly backwards briefly, as real bees do),
-/// how fast the roll reaches its target, and the smoothing of the mean path for sway.
-const YAW_LAG_S: f32 = 0.06;
+/// Time constants of the body's attitude, seconds: how fast the roll reaches its target,
+/// and the smoothing of the mean path for sway. (How fast the heading follows the velocity
+/// is the `heading_lag` parameter.)
 const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
 
 /// Per-step blend factors 1 − exp(−dt/τ) of the first-order lags above.
 struct Lags {
-    yaw: f32,
     roll: f32,
     sway: f32,
 }
@@ -32,7 +30,6 @@ impl Lags {
     fn new(dt: f32) -> Self {
         let f = |tau: f32| 1.0 - (-dt / tau).exp();
         Lags {
-            yaw: f(YAW_LAG_S),
             roll: f(ROLL_LAG_S),
             sway: f(SWAY_PATH_S),
         }
@@ -89,6 +86,8 @@ struct Hot {
 struct Bee {
     pos: Vec3,
     vel: Vec3,
+    /// Ornstein–Uhlenbeck state (stationary N(0, 1)) of the preferred speed's wandering.
+    wander: f32,
     /// Exponentially smoothed path; sway is the lateral offset from it.
     mean_pos: Vec3,
     /// Heading about +Y, radians.
@@ -134,6 +133,13 @@ struct SwarmRt {
     d0: f32,
     fov: f32,
     roll_max: f32,
+    /// Per-substep blend of the heading towards the direction of travel.
+    yaw_blend: f32,
+    /// Preferred-speed wandering: σ (log units), and the per-substep decay and kick of
+    /// its Ornstein–Uhlenbeck state.
+    wander_sigma: f32,
+    wander_decay: f32,
+    wander_kick: f32,
     time_unit: f64,
     stiffness: f32,
     spring: f32,
@@ -196,6 +202,12 @@ impl Simulation {
                     d0: p.avoid_distance as f32,
                     fov: p.fov_deg as f32,
                     roll_max: p.roll_max_deg as f32,
+                    // Computed as the former fixed lag was, in f32, so caches stay identical.
+                    yaw_blend: 1.0 - (-(shot.dt() as f32) / p.heading_lag as f32).exp(),
+                    wander_sigma: p.speed_wander as f32,
+                    wander_decay: (-shot.dt() / p.speed_wander_time).exp() as f32,
+                    wander_kick: (1.0 - (-2.0 * shot.dt() / p.speed_wander_time).exp()).sqrt()
+                        as f32,
                     time_unit: p.oscillation_time_unit,
                     stiffness: p.pressure_stiffness as f32,
                     spring: p.collision_stiffness as f32,
@@ -307,6 +319,7 @@ impl Simulation {
                 bees.push(Bee {
                     pos,
                     vel,
+                    wander: rng.gaussian(),
                     mean_pos: pos,
                     yaw,
                     pitch_deg,
@@ -656,8 +669,16 @@ impl Simulation {
                     s.mean_cl,
                 );
                 let a_o = heading * f_o;
-                // Linear drag sized so that mean thrust balances at the preferred speed.
-                let drag = s.k1 * oscillation::mean_thrust_accel() / b.speed.max(1e-3);
+                // Linear drag sized so that mean thrust balances at the preferred speed,
+                // which wanders slowly (log-normal, mean preserved) when speed_wander > 0.
+                let mut pref = b.speed;
+                if s.wander_sigma > 0.0 {
+                    let mut rng = Rng::new(shot.seed ^ 0x5BEED, i as u64, step_index);
+                    out.wander = b.wander * s.wander_decay + s.wander_kick * rng.gaussian();
+                    let sg = s.wander_sigma;
+                    pref *= (sg * out.wander - 0.5 * sg * sg).exp();
+                }
+                let drag = s.k1 * oscillation::mean_thrust_accel() / pref.max(1e-3);
                 // Eq. 1, plus the terms the paper leaves implicit (docs/model.md). While
                 // avoiding, the other rules are faded out by the ramp γ.
                 s.k1 * a_o + gamma * (s.k2 * s.curl.force(b.pos) + a_attr) + s.k3 * a_rep
@@ -707,7 +728,7 @@ impl Simulation {
             let mut dy = target - b.yaw;
             dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
                 - std::f32::consts::PI;
-            out.yaw = (b.yaw + dy * lags.yaw).rem_euclid(std::f32::consts::TAU);
+            out.yaw = (b.yaw + dy * s.yaw_blend).rem_euclid(std::f32::consts::TAU);
         }
         out.mean_pos = b.mean_pos + (pos - b.mean_pos) * lags.sway;
         out.prev_attitude = (b.yaw, b.pitch_deg, b.roll_deg);
