@@ -127,6 +127,10 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
     assert!(
         text.contains("[preset]") && text.contains("provenance") && text.contains("# calibrated")
     );
+    // The default search: Γ, the speed and d0; the heading lag and speed wander only on
+    // request.
+    assert_eq!(text.matches("# calibrated").count(), 8, "{text}");
+    assert!(text.contains("\nheading_lag = 0.06\n"), "{text}");
     assert!(dir.path().join("fitted.fitness.png").exists());
     let first = text.clone();
 
@@ -163,6 +167,19 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
     run_calibrate(&only).unwrap();
     let text = std::fs::read_to_string(dir.path().join("speed.toml")).unwrap();
     assert_eq!(text.matches("# calibrated").count(), 1);
+    let extra = CalibrateArgs {
+        only: vec!["speed_wander".into(), "heading_lag".into()],
+        out: dir.path().join("extra.toml"),
+        ..only.clone()
+    };
+    run_calibrate(&extra).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("extra.toml")).unwrap();
+    assert_eq!(text.matches("# calibrated").count(), 2);
+    assert!(text.contains("speed_wander = ") && text.contains("heading_lag = "));
+    // A preset with the new parameters loads.
+    let user = SHOT.replace("count = 3", "count = 3\npreset = \"extra.toml\"");
+    std::fs::write(&user_path, user).unwrap();
+    shot::load(&user_path).unwrap();
     let bad = CalibrateArgs {
         only: vec!["wings".into()],
         ..only
