@@ -28,12 +28,16 @@ struct Lags {
 
 impl Lags {
     fn new(dt: f32) -> Self {
-        let f = |tau: f32| 1.0 - (-dt / tau).exp();
         Lags {
-            roll: f(ROLL_LAG_S),
-            sway: f(SWAY_PATH_S),
+            roll: lag_blend(dt, ROLL_LAG_S),
+            sway: lag_blend(dt, SWAY_PATH_S),
         }
     }
+}
+
+/// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
+fn lag_blend(dt: f32, tau: f32) -> f32 {
+    1.0 - (-dt / tau).exp()
 }
 
 /// Neighbours cached per bee by the density pass for the force pass: one grid walk per
@@ -202,8 +206,7 @@ impl Simulation {
                     d0: p.avoid_distance as f32,
                     fov: p.fov_deg as f32,
                     roll_max: p.roll_max_deg as f32,
-                    // Computed as the former fixed lag was, in f32, so caches stay identical.
-                    yaw_blend: 1.0 - (-(shot.dt() as f32) / p.heading_lag as f32).exp(),
+                    yaw_blend: lag_blend(shot.dt() as f32, p.heading_lag as f32),
                     wander_sigma: p.speed_wander as f32,
                     wander_decay: (-shot.dt() / p.speed_wander_time).exp() as f32,
                     wander_kick: (1.0 - (-2.0 * shot.dt() / p.speed_wander_time).exp()).sqrt()
