@@ -483,6 +483,32 @@ fn keys_of_another_obstacle_type_and_unknown_swarm_names() {
 }
 
 #[test]
+fn a_normal_belongs_to_a_surface_target_and_is_not_zero() {
+    let err =
+        refuse("[[swarm]]\ncount = 3\n[[target]]\nposition = [0, 1, 0]\nnormal = [0, 1, 0]\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:5:10:",
+            "key `target[0].normal`",
+            "an attractor target has no `normal`",
+            "hint: type = \"surface\"",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"surface\"\nposition = [0, 0, 0]\nnormal = [0, 0, 0]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:10:",
+            "key `target[0].normal`",
+            "expected a non-zero normal",
+        ],
+    );
+}
+
+#[test]
 fn preset_files_missing_or_bad() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();

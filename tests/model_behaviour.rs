@@ -471,3 +471,33 @@ fn a_longer_heading_lag_lets_body_and_velocity_differ_more() {
         "a slow heading should trail the velocity more: {slow}° vs {quick}°"
     );
 }
+
+/// The fraction of frames (all bees) spent within 10 cm above the ground at y = 0, for a
+/// few bees flying in a 2 m room, with `extra` (TOML) added to the shot.
+fn share_near_the_ground(extra: &str) -> f32 {
+    let src = format!(
+        "[scene]\nfps = 50\nframes = [1, 1000]\nseed = 7\n[[swarm]]\ncount = 8\nbounds = {{ center = [0, 1, 0], size = [2, 2, 2] }}\nparams = {{ speed = 0.3, avoid_distance = 0.05 }}\nspawn = {{ shape = \"box\", center = [0, 1.2, 0], size = [1, 1, 1] }}\n[[obstacle]]\ntype = \"plane\"\nname = \"ground\"\n{extra}"
+    );
+    let (mut near, mut n) = (0usize, 0usize);
+    run_with(Simulation::new(&shot(&src)), |sim| {
+        for p in &sim.record()[0].position {
+            assert!(p.y >= 0.0, "a bee went through the ground: {p}");
+            near += (p.y < 0.1) as usize;
+            n += 1;
+        }
+    });
+    near as f32 / n as f32
+}
+
+#[test]
+fn a_landing_surface_draws_bees_down_to_it_without_letting_them_through() {
+    let free = share_near_the_ground("");
+    let landing = share_near_the_ground(
+        "[[target]]\ntype = \"surface\"\nposition = [0, 0, 0]\nnormal = [0, 1, 0]\nstrength = 1.0\n",
+    );
+    println!("share of frames within 10 cm of the ground: free {free:.3}, landing {landing:.3}");
+    assert!(
+        landing > 0.3 && free < 0.1,
+        "the surface should hold bees near it: {landing} vs {free} without it"
+    );
+}

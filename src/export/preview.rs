@@ -11,7 +11,7 @@ use super::CacheWriter;
 use super::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::plot::{Canvas, Chart, Legend, LegendMark, Rgb, palette};
-use crate::shot::{Obstacle, Shape, Shot, Target};
+use crate::shot::{Obstacle, Shape, Shot, Target, TargetKind};
 use crate::sim::{CacheMeta, Frame};
 use glam::Vec3;
 use std::io::Write;
@@ -183,7 +183,14 @@ impl PreviewWriter {
             c.polyline(&pts, TARGET, 1);
             let (x, y) = pts[0];
             c.fill_circle(x, y, 4.0, TARGET);
-            c.circle(x, y, t.radius as f64 * scale, TARGET);
+            if t.kind == TargetKind::Surface {
+                // A landing surface is a plane: drawn edge-on like a plane obstacle.
+                if let Some((a, b)) = plane_edge(chart, axis, t.keys[0].1, t.normal) {
+                    c.line(a.0, a.1, b.0, b.1, TARGET, 1);
+                }
+            } else {
+                c.circle(x, y, t.radius as f64 * scale, TARGET);
+            }
             c.text(x as i64 + 7, y as i64 - 12, &t.name, TARGET, 1);
         }
     }
@@ -192,8 +199,6 @@ impl PreviewWriter {
         let scale = (chart.right - chart.left) as f64 / (chart.x.1 - chart.x.0).abs();
         let col = palette::GREY;
         let to = |p: Vec3| chart.px(p.x as f64, view_y(p, axis));
-        // The view direction: −Y for the top view, −Z for the side view.
-        let view = if axis == 2 { Vec3::Y } else { Vec3::Z };
         for o in &self.obstacles {
             match o.shape {
                 Shape::Sphere { center, radius } => {
@@ -261,14 +266,9 @@ impl PreviewWriter {
                     }
                 }
                 Shape::Plane { point, normal } => {
-                    // Seen edge-on only when the view runs along the plane.
-                    if normal.dot(view).abs() > 1e-3 {
-                        continue;
+                    if let Some((p, q)) = plane_edge(chart, axis, point, normal) {
+                        c.line(p.0, p.1, q.0, q.1, col, 2);
                     }
-                    let along = normal.cross(view).normalize_or_zero();
-                    let far = (chart.x.1 - chart.x.0).abs() as f32 * 4.0;
-                    let (p, q) = (to(point - along * far), to(point + along * far));
-                    c.line(p.0, p.1, q.0, q.1, col, 2);
                 }
             }
         }
@@ -276,6 +276,25 @@ impl PreviewWriter {
 }
 
 const TARGET: Rgb = [180, 30, 30];
+
+/// The screen end points of a plane seen edge-on, or `None` when the view does not run
+/// along it (then it covers the whole view or none of it).
+fn plane_edge(
+    chart: &Chart,
+    axis: usize,
+    point: Vec3,
+    normal: Vec3,
+) -> Option<((f64, f64), (f64, f64))> {
+    // The view direction: −Y for the top view, −Z for the side view.
+    let view = if axis == 2 { Vec3::Y } else { Vec3::Z };
+    if normal.dot(view).abs() > 1e-3 {
+        return None;
+    }
+    let along = normal.cross(view).normalize_or_zero();
+    let far = (chart.x.1 - chart.x.0).abs() as f32 * 4.0;
+    let to = |p: Vec3| chart.px(p.x as f64, view_y(p, axis));
+    Some((to(point - along * far), to(point + along * far)))
+}
 
 /// The vertical screen coordinate of a view: z for the top view, y for the side view.
 fn view_y(p: Vec3, axis: usize) -> f64 {

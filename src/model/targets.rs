@@ -12,14 +12,28 @@ use glam::Vec3;
 pub fn attraction(p: Vec3, target: Vec3, strength: f32, reach: f32) -> Vec3 {
     let r = target - p;
     let d = r.length();
+    normalize_or(r, Vec3::ZERO) * pull(d, strength, reach)
+}
+
+/// Attraction towards a landing surface, the plane through `point` with unit `normal`
+/// (m/s²): the same pull as [`attraction`], along the normal, by the distance to the plane.
+/// A bee behind the plane is pulled back to it too.
+#[inline]
+pub fn surface_attraction(p: Vec3, point: Vec3, normal: Vec3, strength: f32, reach: f32) -> Vec3 {
+    let s = normal.dot(p - point);
+    -normal * (s.signum() * pull(s.abs(), strength, reach))
+}
+
+/// The pull's magnitude at distance `d`: `strength`, fading out between 0.8 × `reach` and
+/// `reach`, and within 2 cm of the target so that a bee on it does not jitter.
+#[inline]
+fn pull(d: f32, strength: f32, reach: f32) -> f32 {
     let fade = if reach.is_finite() {
         1.0 - smoothstep(0.8 * reach, reach, d)
     } else {
         1.0
     };
-    // Near the centre the pull fades too, so a bee on the target does not jitter.
-    let near = smoothstep(0.0, 0.02, d);
-    normalize_or(r, Vec3::ZERO) * (strength * fade * near)
+    strength * fade * smoothstep(0.0, 0.02, d)
 }
 
 /// Pull back into an axis-aligned box (centre, half extents): proportional to the distance
@@ -41,6 +55,22 @@ mod tests {
         assert!((a - Vec3::X * 2.0).length() < 1e-6);
         assert_eq!(attraction(Vec3::ZERO, Vec3::X * 5.0, 2.0, 1.0), Vec3::ZERO);
         assert_eq!(attraction(Vec3::X, Vec3::X, 2.0, 1.0), Vec3::ZERO);
+    }
+
+    #[test]
+    fn surface_attraction_pulls_along_the_normal_from_either_side() {
+        let (o, n) = (Vec3::ZERO, Vec3::Y);
+        // Above the plane, off to the side: straight down, whatever the offset.
+        let a = surface_attraction(Vec3::new(3.0, 0.5, -2.0), o, n, 1.5, f32::INFINITY);
+        assert!((a - Vec3::new(0.0, -1.5, 0.0)).length() < 1e-6);
+        let below = surface_attraction(Vec3::new(0.0, -0.5, 0.0), o, n, 1.5, f32::INFINITY);
+        assert!((below - Vec3::new(0.0, 1.5, 0.0)).length() < 1e-6);
+        // Zero on the plane and beyond the reach.
+        assert_eq!(surface_attraction(Vec3::X, o, n, 1.5, 1.0), Vec3::ZERO);
+        assert_eq!(
+            surface_attraction(Vec3::Y * 2.0, o, n, 1.5, 1.0),
+            Vec3::ZERO
+        );
     }
 
     #[test]

@@ -179,6 +179,8 @@ pub enum TargetKind {
     Flower,
     /// A pure attractor, with no body.
     Attractor,
+    /// A landing surface: pulls towards a plane rather than a point, with no body.
+    Surface,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -191,8 +193,12 @@ pub struct Target {
     pub radius: f32,
     /// Attraction, m/s².
     pub strength: f32,
-    /// Attraction acts within this distance, m; `f32::INFINITY` = everywhere.
+    /// Attraction acts within this distance, m; `f32::INFINITY` = everywhere. For a surface,
+    /// the distance from its plane.
     pub reach: f32,
+    /// A surface's unit normal, pointing to the side the bees come from (`Vec3::ZERO` for
+    /// the other kinds).
+    pub normal: Vec3,
     /// Indices of the swarms it attracts (all when the shot names none).
     pub swarms: Vec<usize>,
 }

@@ -876,12 +876,33 @@ fn resolve_target(
 ) -> Result<Target, ShotError> {
     let k = |key: &str| format!("target[{i}].{key}");
     let kind_name = rt.kind.clone().unwrap_or_else(|| "attractor".to_owned());
-    let (kind, (radius, strength)) =
-        match cx.one_of(&k("type"), &kind_name, &["nest", "flower", "attractor"])? {
-            "nest" => (TargetKind::Nest, d::NEST),
-            "flower" => (TargetKind::Flower, d::FLOWER),
-            _ => (TargetKind::Attractor, d::ATTRACTOR),
-        };
+    let (kind, (radius, strength)) = match cx.one_of(
+        &k("type"),
+        &kind_name,
+        &["nest", "flower", "attractor", "surface"],
+    )? {
+        "nest" => (TargetKind::Nest, d::NEST),
+        "flower" => (TargetKind::Flower, d::FLOWER),
+        "surface" => (TargetKind::Surface, d::SURFACE),
+        _ => (TargetKind::Attractor, d::ATTRACTOR),
+    };
+    let normal = match (kind, rt.normal) {
+        (TargetKind::Surface, n) => {
+            let n = cx.vec(&k("normal"), n.unwrap_or([0.0, 1.0, 0.0]))?;
+            if n.length() < 1e-9 {
+                return Err(cx.err(&k("normal"), "expected a non-zero normal [x, y, z]"));
+            }
+            n.normalize()
+        }
+        (_, None) => Vec3::ZERO,
+        (_, Some(_)) => {
+            return Err(cx.hint(
+                &k("normal"),
+                format!("{} target has no `normal`", with_article(&kind_name)),
+                "type = \"surface\" pulls towards a plane with this normal",
+            ));
+        }
+    };
     let name = rt
         .name
         .clone()
@@ -959,8 +980,15 @@ fn resolve_target(
         radius,
         strength,
         reach,
+        normal,
         swarms: swarm_ids,
     })
+}
+
+/// "an attractor", "a nest".
+fn with_article(word: &str) -> String {
+    let vowel = word.starts_with(['a', 'e', 'i', 'o', 'u']);
+    format!("{} {word}", if vowel { "an" } else { "a" })
 }
 
 /// A spawn region that lies wholly inside obstacles would trap every bee.

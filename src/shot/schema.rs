@@ -133,6 +133,7 @@ pub struct RawTarget {
     pub radius: Option<f64>,
     pub strength: Option<f64>,
     pub reach: Option<f64>,
+    pub normal: Option<V3>,
     pub swarms: Option<Vec<String>>,
     pub keys: Option<Vec<RawKey>>,
 }

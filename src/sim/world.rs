@@ -242,7 +242,7 @@ impl Simulation {
             .iter()
             .map(|t| {
                 let offsets = match t.kind {
-                    TargetKind::Attractor => Vec::new(),
+                    TargetKind::Attractor | TargetKind::Surface => Vec::new(),
                     _ => {
                         repulsion::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
                     }
@@ -608,12 +608,17 @@ impl Simulation {
         for &ti in &s.targets {
             let target = &shot.targets[ti];
             let tr = &self.targets[ti];
-            a_attr += targets::attraction(
-                b.pos,
-                tr.center,
-                target.strength * s.attraction,
-                target.reach,
-            );
+            let strength = target.strength * s.attraction;
+            a_attr += match target.kind {
+                TargetKind::Surface => targets::surface_attraction(
+                    b.pos,
+                    tr.center,
+                    target.normal,
+                    strength,
+                    target.reach,
+                ),
+                _ => targets::attraction(b.pos, tr.center, strength, target.reach),
+            };
             if s.model == ModelKind::Bee && b.pos.distance(tr.center) <= tr.bounding + s.h + ri {
                 for off in &tr.offsets {
                     let r = b.pos - (tr.center + *off);
