@@ -168,14 +168,20 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
     let text = std::fs::read_to_string(dir.path().join("speed.toml")).unwrap();
     assert_eq!(text.matches("# calibrated").count(), 1);
     let extra = CalibrateArgs {
-        only: vec!["speed_wander".into(), "heading_lag".into()],
+        only: vec![
+            "speed_wander".into(),
+            "heading_lag".into(),
+            "attraction".into(),
+        ],
         out: dir.path().join("extra.toml"),
         ..only.clone()
     };
     run_calibrate(&extra).unwrap();
     let text = std::fs::read_to_string(dir.path().join("extra.toml")).unwrap();
-    assert_eq!(text.matches("# calibrated").count(), 2);
-    assert!(text.contains("speed_wander = ") && text.contains("heading_lag = "));
+    assert_eq!(text.matches("# calibrated").count(), 3);
+    for key in ["speed_wander = ", "heading_lag = ", "attraction = "] {
+        assert!(text.contains(key), "{key} missing from {text}");
+    }
     // A preset with the new parameters loads.
     let user = SHOT.replace("count = 3", "count = 3\npreset = \"extra.toml\"");
     std::fs::write(&user_path, user).unwrap();

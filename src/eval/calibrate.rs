@@ -51,7 +51,7 @@ impl ParamRange {
 /// Ranges bracket paper 000's Table I (κ1 1–1.5, κ2 2.3–5, κ3 0.9–1.7, L 2.2–2.7 and h 3
 /// scene units = 0.11–0.135 m and 0.15 m, ε 1.7–2) by a wide margin either way, and the
 /// speed spans hovering to fast cruising of small insects.
-pub const PARAMS: [ParamRange; 11] = [
+pub const PARAMS: [ParamRange; 12] = [
     ParamRange {
         key: "kappa1",
         lo: 0.1,
@@ -124,13 +124,20 @@ pub const PARAMS: [ParamRange; 11] = [
         hi: 10.0,
         log: true,
     },
+    // How strongly the shot's targets pull (a landing surface, a nest): the scale of the
+    // shot's own `strength`, from a tenth to three times it.
+    ParamRange {
+        key: "attraction",
+        lo: 0.1,
+        hi: 3.0,
+        log: true,
+    },
 ];
 
 /// How many of `PARAMS`, from the start, a calibration searches by default: Γ, the speed
-/// and d0. The heading lag and the preferred speed's wandering are searched only when
-/// `--only` names them (docs/validation.md: with them acceleration and turning fit the
-/// recording better, but no search so far beat the Brownian baseline on speed, and the
-/// default keeps the checked-in calibration reproducible).
+/// and d0. The heading lag, the preferred speed's wandering and the targets' pull are
+/// searched only when `--only` names them (docs/validation.md records what each did to the
+/// fit of the mosquito recording).
 pub const DEFAULT_SEARCH: usize = 8;
 
 /// The calibrated subset of `PARAMS` (the default search unless `--only` names some).
@@ -169,6 +176,7 @@ pub fn apply(space: &[ParamRange], genes: &[f64], p: &mut BeeParams) {
             "heading_lag" => p.heading_lag = v,
             "speed_wander" => p.speed_wander = v,
             "speed_wander_time" => p.speed_wander_time = v,
+            "attraction" => p.attraction = v,
             other => unreachable!("unknown calibrated parameter {other}"),
         }
     }
@@ -299,7 +307,7 @@ pub struct CalibrateArgs {
     /// Calibrate only these parameters (comma-separated), keeping the shot's values for
     /// the rest; e.g. `--only speed` for the Brownian and boids baselines. Default: κ1, κ2,
     /// κ3, noise_cell, noise_gain, neighbour_radius, speed, avoid_distance; heading_lag,
-    /// speed_wander and speed_wander_time are searched only when named here.
+    /// speed_wander, speed_wander_time and attraction are searched only when named here.
     #[arg(long, value_delimiter = ',', value_name = "PARAM,...")]
     pub only: Vec<String>,
 }
