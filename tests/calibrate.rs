@@ -172,14 +172,20 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
             "speed_wander".into(),
             "heading_lag".into(),
             "attraction".into(),
+            "surface_speed".into(),
         ],
         out: dir.path().join("extra.toml"),
         ..only.clone()
     };
     run_calibrate(&extra).unwrap();
     let text = std::fs::read_to_string(dir.path().join("extra.toml")).unwrap();
-    assert_eq!(text.matches("# calibrated").count(), 3);
-    for key in ["speed_wander = ", "heading_lag = ", "attraction = "] {
+    assert_eq!(text.matches("# calibrated").count(), 4);
+    for key in [
+        "speed_wander = ",
+        "heading_lag = ",
+        "attraction = ",
+        "surface_speed = ",
+    ] {
         assert!(text.contains(key), "{key} missing from {text}");
     }
     // A preset with the new parameters loads.

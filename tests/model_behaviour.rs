@@ -501,3 +501,58 @@ fn a_landing_surface_draws_bees_down_to_it_without_letting_them_through() {
         "the surface should hold bees near it: {landing} vs {free} without it"
     );
 }
+
+/// Median speeds (m/s) of bees over a landing surface at y = 0: within 3 cm of it and more
+/// than 25 cm above it, with `params` (TOML) added to the swarm's parameters.
+fn speeds_low_and_high(params: &str) -> (f32, f32) {
+    let src = format!(
+        "[scene]\nfps = 50\nframes = [1, 1500]\nseed = 3\n[[swarm]]\ncount = 8\nvariation = {{ speed = 0 }}\nbounds = {{ center = [0, 1, 0], size = [2, 2, 2] }}\nparams = {{ speed = 0.3, avoid_distance = 0.05, {params} }}\nspawn = {{ shape = \"box\", center = [0, 0.6, 0], size = [1, 1, 1] }}\n[[obstacle]]\ntype = \"plane\"\nname = \"ground\"\n[[target]]\ntype = \"surface\"\nposition = [0, 0, 0]\nnormal = [0, 1, 0]\nstrength = 0.5\n"
+    );
+    let (mut low, mut high) = (Vec::new(), Vec::new());
+    run_with(Simulation::new(&shot(&src)), |sim| {
+        let s = &sim.record()[0];
+        for (p, v) in s.position.iter().zip(&s.velocity) {
+            if p.y < 0.03 {
+                low.push(v.length());
+            } else if p.y > 0.25 {
+                high.push(v.length());
+            }
+        }
+    });
+    let median = |v: &mut Vec<f32>| {
+        assert!(v.len() > 200, "too few samples: {}", v.len());
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    (median(&mut low), median(&mut high))
+}
+
+#[test]
+fn a_bee_slows_near_a_surface_with_surface_speed() {
+    let (low0, high0) = speeds_low_and_high("surface_speed = 1.0");
+    let (low1, high1) = speeds_low_and_high("surface_speed = 0.3, surface_speed_distance = 0.1");
+    println!(
+        "median speed near / far from the surface: off {low0:.3} / {high0:.3}, on {low1:.3} / {high1:.3} m/s"
+    );
+    assert!(
+        low1 / high1 < 0.6 && low1 / high1 < 0.75 * (low0 / high0),
+        "optic-flow control should slow bees near the surface: {low1}/{high1} vs {low0}/{high0}"
+    );
+}
+
+#[test]
+fn a_bee_stopped_in_a_corner_turns_and_flies_out() {
+    // Two walls meeting along the Y axis; the bee sits 2 cm from both, facing the corner,
+    // almost still, without noise to shake it loose.
+    let src = "[scene]\nfps = 50\nframes = [1, 250]\n[[swarm]]\ncount = 1\nvariation = { size = 0, speed = 0, phase = 0 }\nbounds = { center = [1, 1, 1], size = [4, 4, 4] }\nparams = { kappa2 = 0, speed = 0.3, avoid_distance = 0.1 }\nspawn = { shape = \"sphere\", center = [0.02, 1, 0.02], radius = 0.001 }\n[[obstacle]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [1, 0, 0]\n[[obstacle]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n";
+    let mut sim = Simulation::new(&shot(src));
+    sim.set_bee(0, Vec3::new(0.02, 1.0, 0.02), Vec3::new(-0.02, 0.0, -0.021));
+    let frames = run_with(sim, |_| {});
+    let end = frames.last().unwrap()[0];
+    let clearance = end.x.min(end.z);
+    println!("after 5 s the bee is at {end}, {clearance:.3} m from the nearer wall");
+    assert!(
+        clearance > 0.3,
+        "the bee should have turned and left the corner: {end}"
+    );
+}

@@ -51,7 +51,7 @@ impl ParamRange {
 /// Ranges bracket paper 000's Table I (κ1 1–1.5, κ2 2.3–5, κ3 0.9–1.7, L 2.2–2.7 and h 3
 /// scene units = 0.11–0.135 m and 0.15 m, ε 1.7–2) by a wide margin either way, and the
 /// speed spans hovering to fast cruising of small insects.
-pub const PARAMS: [ParamRange; 12] = [
+pub const PARAMS: [ParamRange; 14] = [
     ParamRange {
         key: "kappa1",
         lo: 0.1,
@@ -104,8 +104,8 @@ pub const PARAMS: [ParamRange; 12] = [
         hi: 0.5,
         log: true,
     },
-    // Not in the default search (see DEFAULT_SEARCH): the body's heading lag (Sec. V-A) and
-    // the preferred speed's wandering, both our additions to the paper's model.
+    // Not in the default search (see DEFAULT_SEARCH), from here on: the body's heading lag
+    // (Sec. V-A) and the preferred speed's wandering, both our additions to the paper.
     ParamRange {
         key: "heading_lag",
         lo: 0.02,
@@ -124,6 +124,20 @@ pub const PARAMS: [ParamRange; 12] = [
         hi: 10.0,
         log: true,
     },
+    // Optic-flow speed control (docs/model.md): the speed at a surface as a fraction of
+    // `speed`, and the distance over which it recovers.
+    ParamRange {
+        key: "surface_speed",
+        lo: 0.1,
+        hi: 1.0,
+        log: false,
+    },
+    ParamRange {
+        key: "surface_speed_distance",
+        lo: 0.01,
+        hi: 1.0,
+        log: true,
+    },
     // How strongly the shot's targets pull (a landing surface, a nest): the scale of the
     // shot's own `strength`, from a tenth to three times it.
     ParamRange {
@@ -135,8 +149,8 @@ pub const PARAMS: [ParamRange; 12] = [
 ];
 
 /// How many of `PARAMS`, from the start, a calibration searches by default: Γ, the speed
-/// and d0. The heading lag, the preferred speed's wandering and the targets' pull are
-/// searched only when `--only` names them (docs/validation.md records what each did to the
+/// and d0. The heading lag, the preferred speed's wandering, the surface speed and the
+/// targets' pull are searched only when `--only` names them (docs/validation.md records what each did to the
 /// fit of the mosquito recording).
 pub const DEFAULT_SEARCH: usize = 8;
 
@@ -176,6 +190,8 @@ pub fn apply(space: &[ParamRange], genes: &[f64], p: &mut BeeParams) {
             "heading_lag" => p.heading_lag = v,
             "speed_wander" => p.speed_wander = v,
             "speed_wander_time" => p.speed_wander_time = v,
+            "surface_speed" => p.surface_speed = v,
+            "surface_speed_distance" => p.surface_speed_distance = v,
             "attraction" => p.attraction = v,
             other => unreachable!("unknown calibrated parameter {other}"),
         }
@@ -307,7 +323,8 @@ pub struct CalibrateArgs {
     /// Calibrate only these parameters (comma-separated), keeping the shot's values for
     /// the rest; e.g. `--only speed` for the Brownian and boids baselines. Default: κ1, κ2,
     /// κ3, noise_cell, noise_gain, neighbour_radius, speed, avoid_distance; heading_lag,
-    /// speed_wander, speed_wander_time and attraction are searched only when named here.
+    /// speed_wander, speed_wander_time, surface_speed, surface_speed_distance and
+    /// attraction are searched only when named here.
     #[arg(long, value_delimiter = ',', value_name = "PARAM,...")]
     pub only: Vec<String>,
 }
@@ -528,6 +545,8 @@ pub fn preset_toml(
         ("heading_lag", p.heading_lag),
         ("speed_wander", p.speed_wander),
         ("speed_wander_time", p.speed_wander_time),
+        ("surface_speed", p.surface_speed),
+        ("surface_speed_distance", p.surface_speed_distance),
         ("fov_deg", p.fov_deg),
         ("roll_max_deg", p.roll_max_deg),
         ("oscillation_time_unit", p.oscillation_time_unit),

@@ -31,6 +31,12 @@ pub struct BeeParams {
     pub speed_wander: f64,
     /// Correlation time of that wandering, seconds.
     pub speed_wander_time: f64,
+    /// Optic-flow speed control: the preferred speed at a surface, as a fraction of
+    /// `speed` (1: no slowing). See [`surface_speed_factor`](crate::model::vision::surface_speed_factor).
+    pub surface_speed: f64,
+    /// Distance over which the preferred speed recovers from `surface_speed` towards
+    /// `speed` (e-folding length), metres.
+    pub surface_speed_distance: f64,
     /// Time constant with which the body's heading follows the direction of travel,
     /// seconds (Sec. V-A: the body and the velocity need not align).
     pub heading_lag: f64,
@@ -90,6 +96,8 @@ impl BeeParams {
             heading_lag: 0.06,
             speed_wander: 0.0,
             speed_wander_time: 2.0,
+            surface_speed: 1.0,
+            surface_speed_distance: 0.15,
             fov_deg: 45.0,
             roll_max_deg: 45.0,
             oscillation_time_unit: 0.005,

@@ -27,6 +27,19 @@ pub fn in_view(o: Vec3, r_e: Vec3, half_angle_deg: f32) -> bool {
     o.dot(r_e) / denom >= half_angle_deg.to_radians().cos()
 }
 
+/// Optic-flow speed control (our addition, docs/model.md): insects hold the image motion
+/// of nearby surfaces roughly constant, so they fly slower the closer a surface is
+/// (Srinivasan et al. 1996 for honeybees; landing bees slow in proportion to height).
+/// The factor on the preferred speed at distance `d` from the nearest surface is
+/// r + (1 − r)(1 − e^(−d/λ)): `ratio` r at the surface, recovering to 1 over `length` λ.
+#[inline]
+pub fn surface_speed_factor(d: f32, ratio: f32, length: f32) -> f32 {
+    if ratio >= 1.0 {
+        return 1.0;
+    }
+    ratio + (1.0 - ratio) * (1.0 - (-d.max(0.0) / length.max(1e-6)).exp())
+}
+
 /// Eq. 5, read so that the normal component vanishes at the surface while the tangential
 /// (slipping) component is kept: u* = u − (1 − γ) n (n·u), γ = |ramp(d/d0)|, applied only
 /// while the bee moves towards the surface (docs/model.md explains the reading).
@@ -80,6 +93,19 @@ mod tests {
         assert_eq!(tune_velocity(u, n, 0.2, 0.1), u);
         // Moving away is never altered.
         assert_eq!(tune_velocity(-u, n, 0.01, 0.1), -u);
+    }
+
+    #[test]
+    fn surface_speed_factor_rises_from_the_ratio_to_one() {
+        assert!((surface_speed_factor(0.0, 0.4, 0.1) - 0.4).abs() < 1e-6);
+        // One e-folding length out, 1 − e^(−1) of the way back.
+        let one = surface_speed_factor(0.1, 0.4, 0.1);
+        assert!((one - (0.4 + 0.6 * (1.0 - (-1.0f32).exp()))).abs() < 1e-6);
+        assert!(surface_speed_factor(2.0, 0.4, 0.1) > 0.9999);
+        assert!(surface_speed_factor(0.05, 0.4, 0.1) < one);
+        // Ratio 1 switches it off, even inside a surface or with a zero length.
+        assert_eq!(surface_speed_factor(-1.0, 1.0, 0.0), 1.0);
+        assert!(surface_speed_factor(0.01, 0.5, 0.0).is_finite());
     }
 
     #[test]

@@ -451,6 +451,18 @@ fn resolve_params(
         "a correlation time from 0.01 to 1000 s"
     );
     set!(
+        surface_speed,
+        0.0,
+        1.0,
+        "a fraction of the speed from 0 to 1"
+    );
+    set!(
+        surface_speed_distance,
+        1e-3,
+        10.0,
+        "a distance from 0.001 to 10 m"
+    );
+    set!(
         heading_lag,
         1e-3,
         100.0,

@@ -46,6 +46,8 @@ pub struct RawParams {
     pub heading_lag: Option<f64>,
     pub speed_wander: Option<f64>,
     pub speed_wander_time: Option<f64>,
+    pub surface_speed: Option<f64>,
+    pub surface_speed_distance: Option<f64>,
     pub fov_deg: Option<f64>,
     pub roll_max_deg: Option<f64>,
     pub oscillation_time_unit: Option<f64>,

@@ -36,6 +36,18 @@ impl Lags {
 }
 
 /// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
+/// Largest yaw rate, rad/s, of a bee that has (nearly) stopped in front of an obstacle it
+/// sees and turns on the spot to face away from it.
+const HOVER_TURN_RATE: f32 = std::f32::consts::PI;
+/// Horizontal speed, m/s, below which a bee avoiding an obstacle turns on the spot: the roll
+/// of Eq. 6 steers only a moving bee, and a bee whose thrust points into a corner stops.
+const HOVER_TURN_SPEED: f32 = 0.05;
+
+/// An angle difference wrapped into [−π, π), radians.
+fn wrap_angle(a: f32) -> f32 {
+    (a + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI
+}
+
 fn lag_blend(dt: f32, tau: f32) -> f32 {
     1.0 - (-dt / tau).exp()
 }
@@ -144,6 +156,10 @@ struct SwarmRt {
     wander_sigma: f32,
     wander_decay: f32,
     wander_kick: f32,
+    /// Optic-flow speed control: preferred-speed fraction at a surface and its recovery
+    /// length (vision::surface_speed_factor).
+    surface_speed: f32,
+    surface_speed_distance: f32,
     time_unit: f64,
     stiffness: f32,
     spring: f32,
@@ -211,6 +227,8 @@ impl Simulation {
                     wander_decay: (-shot.dt() / p.speed_wander_time).exp() as f32,
                     wander_kick: (1.0 - (-2.0 * shot.dt() / p.speed_wander_time).exp()).sqrt()
                         as f32,
+                    surface_speed: p.surface_speed as f32,
+                    surface_speed_distance: p.surface_speed_distance as f32,
                     time_unit: p.oscillation_time_unit,
                     stiffness: p.pressure_stiffness as f32,
                     spring: p.collision_stiffness as f32,
@@ -647,6 +665,10 @@ impl Simulation {
         let air = b.vel - wind;
         let heading = Quat::from_rotation_y(b.yaw);
         let mut gamma = 1.0f32;
+        // While avoiding an obstacle it sees: the horizontal way out, away from every
+        // obstacle within d0 (seen or not, so that a corner's way out is its diagonal).
+        let mut avoiding = false;
+        let mut away = Vec3::ZERO;
         let a = match s.model {
             ModelKind::Bee => {
                 let tt = t / s.time_unit;
@@ -656,15 +678,22 @@ impl Simulation {
                 let forward =
                     heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
                 let mut nearest = f32::INFINITY;
+                let mut nearest_any = f32::INFINITY;
                 for o in &shot.obstacles {
                     let q = obstacle::query(&o.shape, b.pos);
                     let d = q.distance - ri;
+                    nearest_any = nearest_any.min(d);
                     let r_e = q.point - b.pos;
+                    if d < s.d0 {
+                        let n = normalize_or(Vec3::new(-r_e.x, 0.0, -r_e.z), Vec3::ZERO);
+                        away += n * (1.0 - d.max(0.0) / s.d0);
+                    }
                     if d < s.d0 && d < nearest && vision::in_view(forward, r_e, s.fov) {
                         nearest = d;
                         roll_target =
                             vision::avoid_roll_deg(vision::side(forward, r_e), d, s.d0, s.roll_max);
                         gamma = vision::ramp((d / s.d0).max(0.0)).abs();
+                        avoiding = true;
                     }
                 }
                 out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * lags.roll;
@@ -679,7 +708,12 @@ impl Simulation {
                 let a_o = heading * f_o;
                 // Linear drag sized so that mean thrust balances at the preferred speed,
                 // which wanders slowly (log-normal, mean preserved) when speed_wander > 0.
-                let mut pref = b.speed;
+                let mut pref = b.speed
+                    * vision::surface_speed_factor(
+                        nearest_any,
+                        s.surface_speed,
+                        s.surface_speed_distance,
+                    );
                 if s.wander_sigma > 0.0 {
                     let mut rng = Rng::new(shot.seed ^ 0x5BEED, i as u64, step_index);
                     out.wander = b.wander * s.wander_decay + s.wander_kick * rng.gaussian();
@@ -731,11 +765,17 @@ impl Simulation {
         out.vel = vel;
 
         let horizontal = Vec3::new(vel.x, 0.0, vel.z);
-        if horizontal.length() > 0.02 {
+        let stopped = avoiding && horizontal.length() < HOVER_TURN_SPEED;
+        if stopped && away.length_squared() > 1e-8 {
+            let e = away;
+            // Stopped facing an obstacle (in a corner, say): turn on the spot towards open
+            // air, or the heading, and with it the thrust, would stay pointed at the wall.
+            let dy = wrap_angle(math::yaw_of(e) - b.yaw);
+            let turn = dy.clamp(-HOVER_TURN_RATE * dt, HOVER_TURN_RATE * dt);
+            out.yaw = (b.yaw + turn).rem_euclid(std::f32::consts::TAU);
+        } else if horizontal.length() > 0.02 {
             let target = math::yaw_of(horizontal);
-            let mut dy = target - b.yaw;
-            dy = (dy + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
-                - std::f32::consts::PI;
+            let dy = wrap_angle(target - b.yaw);
             out.yaw = (b.yaw + dy * s.yaw_blend).rem_euclid(std::f32::consts::TAU);
         }
         out.mean_pos = b.mean_pos + (pos - b.mean_pos) * lags.sway;
