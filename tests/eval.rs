@@ -3,7 +3,7 @@
 
 use beeswarm::eval::histogram::Summary;
 use beeswarm::eval::metrics::{Metric, MetricOptions, compute, poly6};
-use beeswarm::eval::report::{Reference, Settings, compare, measure};
+use beeswarm::eval::report::{Measured, Reference, Settings, compare, measure};
 use beeswarm::eval::resample::resample;
 use beeswarm::eval::tracks::{self, Dataset, Track, TrackFormat};
 use beeswarm::plot::{Canvas, Chart, Legend, LegendMark, palette};
@@ -200,6 +200,35 @@ fn single_insect_data_reports_neighbour_metrics_as_not_applicable() {
     let json = serde_json::to_string(&rep).unwrap();
     assert!(json.contains("\"l1\":null") && !json.contains("NaN"));
     assert_eq!(Summary::of(&[]).n, 0);
+}
+
+#[test]
+fn pooled_runs_keep_neighbours_within_a_run_and_add_their_samples() {
+    let settings = Settings {
+        dt: DT,
+        bins: 20,
+        density_radius: 0.15,
+        min_speed: 1e-3,
+        tail: 0.005,
+    };
+    // Two runs of one insect each, flying through the same place at the same times: pooled,
+    // they are still lone insects (no neighbour samples), with twice the samples of one.
+    let a = measure(&dataset(vec![circle("0", 0.3, 1.0, 200)]), &settings, true);
+    let b = measure(&dataset(vec![circle("0", 0.3, 0.5, 200)]), &settings, true);
+    let pooled = Measured::pool("both", vec![a.clone(), b.clone()]);
+    assert_eq!(pooled.info.name, "both");
+    assert_eq!(pooled.info.tracks, 2);
+    assert_eq!(pooled.samples.shared_instants, 0);
+    assert!(pooled.samples.get(Metric::NeighbourDistance).is_empty());
+    let speeds = pooled.samples.get(Metric::Speed);
+    assert_eq!(speeds.len(), a.samples.get(Metric::Speed).len() * 2);
+    assert!(all_close(&speeds[..speeds.len() / 2], 1.0, 1e-9));
+    assert!(all_close(&speeds[speeds.len() / 2..], 0.5, 1e-9));
+    // Pooling a run with itself changes no distribution.
+    let reference = Reference::new(a.clone(), settings.bins);
+    let twice = Measured::pool("twice", vec![b.clone(), b.clone()]);
+    let rep = compare(settings, &reference, &[b, twice]);
+    assert_eq!(rep.scores[0].fitness, rep.scores[1].fitness);
 }
 
 /// The recording at `<repo>/../shared/data/`, or in `$BEESWARM_DATA_DIR` (for work trees

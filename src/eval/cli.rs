@@ -19,13 +19,14 @@ use std::path::{Path, PathBuf};
 /// 002's entropy-weighted score. See docs/validation.md.
 #[derive(clap::Args, Clone, Debug)]
 pub struct EvalArgs {
-    /// Simulated tracks to evaluate (`NAME=PATH` sets the name shown in reports).
+    /// Simulated tracks to evaluate (`NAME=PATH` sets the name shown in reports;
+    /// `NAME=A.csv,B.csv` pools several runs, e.g. seeds, into one candidate).
     pub tracks: String,
     /// The recording to compare with.
     #[arg(long, value_name = "REAL")]
     pub reference: PathBuf,
     /// More simulated tracks compared in the same report and figure (repeatable,
-    /// `NAME=PATH` allowed), e.g. baseline models.
+    /// `NAME=PATH` and `NAME=A.csv,B.csv` allowed), e.g. baseline models.
     #[arg(long = "candidate", value_name = "TRACKS")]
     pub candidates: Vec<String>,
     /// Write the report as JSON here.
@@ -52,25 +53,30 @@ pub struct EvalArgs {
     pub min_speed: f64,
 }
 
-/// Splits `NAME=PATH`; a plain path is named after its file.
-pub fn named_path(s: &str) -> (String, PathBuf) {
-    if let Some((name, path)) = s.split_once('=')
-        && !name.is_empty()
-        && !name.contains(['/', '\\'])
-    {
-        return (name.to_owned(), PathBuf::from(path));
-    }
-    let p = PathBuf::from(s);
-    let name = p
-        .file_name()
+/// Splits `NAME=PATH[,PATH...]`: the runs pooled into one candidate. Without a name, the
+/// candidate is named after its first file.
+pub fn named_paths(s: &str) -> (String, Vec<PathBuf>) {
+    let (name, list) = match s.split_once('=') {
+        Some((name, list)) if !name.is_empty() && !name.contains(['/', '\\']) => {
+            (Some(name.to_owned()), list)
+        }
+        _ => (None, s),
+    };
+    let paths: Vec<PathBuf> = list.split(',').map(PathBuf::from).collect();
+    let name = name.unwrap_or_else(|| file_stem_name(&paths[0], list));
+    (name, paths)
+}
+
+/// A tracks file's name without `.tracks.csv` (or `fallback` if it has none).
+fn file_stem_name(p: &Path, fallback: &str) -> String {
+    p.file_name()
         .map(|n| {
             n.to_string_lossy()
                 .trim_end_matches(".csv")
                 .trim_end_matches(".tracks")
                 .to_owned()
         })
-        .unwrap_or_else(|| s.to_owned());
-    (name, p)
+        .unwrap_or_else(|| fallback.to_owned())
 }
 
 /// Chooses the common step: the coarsest native step (rounded to microseconds, so 50 Hz
@@ -99,15 +105,21 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         return Err(Error::input("--density-radius must be positive"));
     }
     let reference = tracks::read(&args.reference)?;
-    let mut sims = Vec::new();
+    // Per candidate, its runs: measured one by one (neighbours only within a run), pooled.
+    let mut sims: Vec<(String, Vec<tracks::Dataset>)> = Vec::new();
     for s in std::iter::once(&args.tracks).chain(&args.candidates) {
-        let (name, path) = named_path(s);
-        let mut ds = tracks::read(&path)?;
-        ds.name = name;
-        sims.push(ds);
+        let (name, paths) = named_paths(s);
+        let mut runs = Vec::new();
+        for path in &paths {
+            let mut ds = tracks::read(path)?;
+            ds.name = name.clone();
+            runs.push(ds);
+        }
+        sims.push((name, runs));
     }
+    let runs = || sims.iter().flat_map(|(_, r)| r);
     let steps: Vec<f64> = std::iter::once(&reference)
-        .chain(&sims)
+        .chain(runs())
         .map(|d| d.median_step())
         .collect();
     let dt = match args.dt.or_else(|| default_dt(&steps)) {
@@ -118,7 +130,7 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             ));
         }
     };
-    for d in std::iter::once(&reference).chain(&sims) {
+    for d in std::iter::once(&reference).chain(runs()) {
         let s = d.median_step();
         if s > dt * 1.01 {
             eprintln!(
@@ -134,7 +146,13 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         min_speed: args.min_speed,
         tail: TAIL,
     };
-    let measured: Vec<Measured> = sims.iter().map(|d| measure(d, &settings, true)).collect();
+    let measured: Vec<Measured> = sims
+        .iter()
+        .map(|(name, runs)| {
+            let parts = runs.iter().map(|d| measure(d, &settings, true)).collect();
+            Measured::pool(name, parts)
+        })
+        .collect();
     let reference = Reference::new(measure(&reference, &settings, true), settings.bins);
     let report = compare(settings, &reference, &measured);
 

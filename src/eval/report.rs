@@ -84,6 +84,27 @@ pub struct Measured {
     pub samples: Samples,
 }
 
+impl Measured {
+    /// Several runs (seeds) of one model as one sample: their metric samples concatenated,
+    /// their counts summed. Neighbour metrics stay within each run.
+    pub fn pool(name: &str, parts: Vec<Measured>) -> Measured {
+        let mut it = parts.into_iter();
+        let mut out = it.next().expect("a candidate has at least one run");
+        out.info.name = name.to_owned();
+        for p in it {
+            out.info.tracks += p.info.tracks;
+            out.info.samples += p.info.samples;
+            out.info.tracked_seconds += p.info.tracked_seconds;
+            out.info.shared_instants += p.info.shared_instants;
+            out.samples.shared_instants += p.samples.shared_instants;
+            for (a, b) in out.samples.values.iter_mut().zip(p.samples.values) {
+                a.extend(b);
+            }
+        }
+        out
+    }
+}
+
 /// Resamples a data set to `settings.dt` and computes every metric.
 pub fn measure(ds: &Dataset, settings: &Settings, neighbours: bool) -> Measured {
     let uni = resample(ds, settings.dt);
