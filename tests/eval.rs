@@ -51,6 +51,17 @@ fn line(id: &str, start: DVec3, vel: DVec3, n: usize) -> Track {
     t
 }
 
+/// Report settings at DT with `bins` shared bins and the CLI's other defaults.
+fn settings(bins: usize) -> Settings {
+    Settings {
+        dt: DT,
+        bins,
+        density_radius: 0.15,
+        min_speed: 1e-3,
+        tail: 0.005,
+    }
+}
+
 fn metrics_of(ds: &Dataset) -> beeswarm::eval::metrics::Samples {
     let opts = MetricOptions {
         dt: DT,
@@ -139,13 +150,7 @@ fn two_parallel_insects_have_known_neighbour_metrics() {
 
 #[test]
 fn identical_data_scores_perfectly_and_a_scaled_copy_does_not() {
-    let settings = Settings {
-        dt: DT,
-        bins: 30,
-        density_radius: 0.15,
-        min_speed: 1e-3,
-        tail: 0.005,
-    };
+    let settings = settings(30);
     let tracks: Vec<Track> = (0..5)
         .map(|i| {
             circle(
@@ -178,13 +183,7 @@ fn identical_data_scores_perfectly_and_a_scaled_copy_does_not() {
 
 #[test]
 fn single_insect_data_reports_neighbour_metrics_as_not_applicable() {
-    let settings = Settings {
-        dt: DT,
-        bins: 20,
-        density_radius: 0.15,
-        min_speed: 1e-3,
-        tail: 0.005,
-    };
+    let settings = settings(20);
     let real = dataset(vec![circle("a", 0.3, 1.0, 200)]);
     let reference = Reference::new(measure(&real, &settings, true), settings.bins);
     let rep = compare(settings, &reference, &[measure(&real, &settings, true)]);
@@ -204,13 +203,7 @@ fn single_insect_data_reports_neighbour_metrics_as_not_applicable() {
 
 #[test]
 fn pooled_runs_keep_neighbours_within_a_run_and_add_their_samples() {
-    let settings = Settings {
-        dt: DT,
-        bins: 20,
-        density_radius: 0.15,
-        min_speed: 1e-3,
-        tail: 0.005,
-    };
+    let settings = settings(20);
     // Two runs of one insect each, flying through the same place at the same times: pooled,
     // they are still lone insects (no neighbour samples), with twice the samples of one.
     let a = measure(&dataset(vec![circle("0", 0.3, 1.0, 200)]), &settings, true);
@@ -298,13 +291,7 @@ fn mosquito_recording_is_split_at_nan_gaps() {
 fn mosquito_recording_compared_with_itself_is_perfect_and_finite() {
     let Some(path) = mosquito_file() else { return };
     let ds = tracks::read(&path).unwrap();
-    let settings = Settings {
-        dt: 0.02,
-        bins: 40,
-        density_radius: 0.15,
-        min_speed: 1e-3,
-        tail: 0.005,
-    };
+    let settings = settings(40); // DT is the recording's 0.02 s
     let m = measure(&ds, &settings, true);
     // One to four mosquitoes in view: neighbours exist at some instants.
     assert!(m.info.shared_instants > 100);
