@@ -809,3 +809,18 @@ fn wing_flap_above_half_the_frame_rate() {
         ],
     );
 }
+
+#[test]
+fn eval_names_an_empty_path_in_a_pooled_list() {
+    let dir = TempDir::new().unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["eval", "model=a.csv,", "--reference", "real.csv"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("model=a.csv,") && run.stderr.contains("found an empty one"),
+        "{}",
+        run.stderr
+    );
+}

@@ -150,8 +150,8 @@ pub const PARAMS: [ParamRange; 14] = [
 
 /// How many of `PARAMS`, from the start, a calibration searches by default: Γ, the speed
 /// and d0. The heading lag, the preferred speed's wandering, the surface speed and the
-/// targets' pull are searched only when `--only` names them (docs/validation.md records what each did to the
-/// fit of the mosquito recording).
+/// targets' pull are searched only when `--only` names them (docs/validation.md records
+/// what each did to the fit of the mosquito recording).
 pub const DEFAULT_SEARCH: usize = 8;
 
 /// The calibrated subset of `PARAMS` (the default search unless `--only` names some).

@@ -104,6 +104,13 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
     if !(args.density_radius.is_finite() && args.density_radius > 0.0) {
         return Err(Error::input("--density-radius must be positive"));
     }
+    for s in std::iter::once(&args.tracks).chain(&args.candidates) {
+        if named_paths(s).1.iter().any(|p| p.as_os_str().is_empty()) {
+            return Err(Error::input(format!(
+                "\"{s}\": expected tracks files separated by commas, found an empty one"
+            )));
+        }
+    }
     let reference = tracks::read(&args.reference)?;
     // Per candidate, its runs: measured one by one (neighbours only within a run), pooled.
     let mut sims: Vec<(String, Vec<tracks::Dataset>)> = Vec::new();

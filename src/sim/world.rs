@@ -35,7 +35,6 @@ impl Lags {
     }
 }
 
-/// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
 /// Largest yaw rate, rad/s, of a bee that has (nearly) stopped in front of an obstacle it
 /// sees and turns on the spot to face away from it.
 const HOVER_TURN_RATE: f32 = std::f32::consts::PI;
@@ -48,6 +47,7 @@ fn wrap_angle(a: f32) -> f32 {
     (a + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI
 }
 
+/// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
 fn lag_blend(dt: f32, tau: f32) -> f32 {
     1.0 - (-dt / tau).exp()
 }
@@ -767,10 +767,9 @@ impl Simulation {
         let horizontal = Vec3::new(vel.x, 0.0, vel.z);
         let stopped = avoiding && horizontal.length() < HOVER_TURN_SPEED;
         if stopped && away.length_squared() > 1e-8 {
-            let e = away;
             // Stopped facing an obstacle (in a corner, say): turn on the spot towards open
             // air, or the heading, and with it the thrust, would stay pointed at the wall.
-            let dy = wrap_angle(math::yaw_of(e) - b.yaw);
+            let dy = wrap_angle(math::yaw_of(away) - b.yaw);
             let turn = dy.clamp(-HOVER_TURN_RATE * dt, HOVER_TURN_RATE * dt);
             out.yaw = (b.yaw + turn).rem_euclid(std::f32::consts::TAU);
         } else if horizontal.length() > 0.02 {
