@@ -10,7 +10,7 @@ pub mod gltf;
 pub mod preview;
 pub mod usda;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use std::path::Path;
 
@@ -76,6 +76,49 @@ pub trait CacheWriter: Send {
     /// they must be renamed into place (the bake renames them only once every writer has
     /// sealed, so a failure in any format leaves every previous cache untouched).
     fn finish(self: Box<Self>) -> Result<Vec<atomic::SealedFile>>;
+}
+
+/// The frame contract of writers that lay out their files from the first frame: frames
+/// arrive in order, one per frame of the range, each with every swarm of the shot.
+/// `writer` names the format in the error; `next_frame` is the frame expected now.
+pub(crate) fn check_frame_order(
+    writer: &str,
+    meta: &CacheMeta,
+    next_frame: i32,
+    frame: &Frame,
+) -> Result<()> {
+    if frame.frame != next_frame || frame.frame > meta.frame_end {
+        return Err(Error::bake(format!(
+            "{writer} writer: got frame {}, expected {next_frame} (range {}..={})",
+            frame.frame, meta.frame_start, meta.frame_end
+        )));
+    }
+    if frame.swarms.len() != meta.swarms.len() {
+        return Err(Error::bake(format!(
+            "{writer} writer: frame {} has {} swarms, the shot has {}",
+            frame.frame,
+            frame.swarms.len(),
+            meta.swarms.len()
+        )));
+    }
+    Ok(())
+}
+
+/// At `finish`: every frame of the range was written (`next_frame` is one past the last).
+pub(crate) fn check_all_frames_written(
+    writer: &str,
+    meta: &CacheMeta,
+    next_frame: i32,
+) -> Result<()> {
+    if next_frame != meta.frame_end + 1 {
+        return Err(Error::bake(format!(
+            "{writer} writer: finished after frame {} of {}..={}",
+            next_frame - 1,
+            meta.frame_start,
+            meta.frame_end
+        )));
+    }
+    Ok(())
 }
 
 /// Opens the preview writer (`<name>.preview.png`, a plot of the trajectories).

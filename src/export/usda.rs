@@ -334,20 +334,7 @@ impl UsdaWriter {
     /// Checks a frame against the contract: in order, every swarm present with its
     /// constant count and ids, every per-bee vector of that length.
     fn check(&mut self, frame: &Frame) -> Result<()> {
-        if frame.frame != self.next_frame || frame.frame > self.meta.frame_end {
-            return Err(Error::bake(format!(
-                "USDA writer: got frame {} where frame {} was expected (range {}-{})",
-                frame.frame, self.next_frame, self.meta.frame_start, self.meta.frame_end
-            )));
-        }
-        if frame.swarms.len() != self.meta.swarms.len() {
-            return Err(Error::bake(format!(
-                "USDA writer: frame {} has {} swarms, the shot has {}",
-                frame.frame,
-                frame.swarms.len(),
-                self.meta.swarms.len()
-            )));
-        }
+        super::check_frame_order("USDA", &self.meta, self.next_frame, frame)?;
         for (k, (s, m)) in frame.swarms.iter().zip(&self.meta.swarms).enumerate() {
             let n = s.ids.len();
             let lens = [
@@ -899,14 +886,7 @@ impl CacheWriter for UsdaWriter {
     }
 
     fn finish(self: Box<Self>) -> Result<Vec<SealedFile>> {
-        if self.next_frame != self.meta.frame_end + 1 {
-            return Err(Error::bake(format!(
-                "USDA writer: finished after frame {} of {}-{}",
-                self.next_frame - 1,
-                self.meta.frame_start,
-                self.meta.frame_end
-            )));
-        }
+        super::check_all_frames_written("USDA", &self.meta, self.next_frame)?;
         if self.clip_frames > 0 {
             self.finish_clips()
         } else {

@@ -218,20 +218,7 @@ impl GltfWriter {
 
 impl CacheWriter for GltfWriter {
     fn write_frame(&mut self, frame: &Frame) -> Result<()> {
-        if frame.frame != self.next_frame || frame.frame > self.meta.frame_end {
-            return Err(Error::bake(format!(
-                "glTF writer: got frame {}, expected {} (range {}..={})",
-                frame.frame, self.next_frame, self.meta.frame_start, self.meta.frame_end
-            )));
-        }
-        if frame.swarms.len() != self.meta.swarms.len() {
-            return Err(Error::bake(format!(
-                "glTF writer: frame {} has {} swarms, the cache {}",
-                frame.frame,
-                frame.swarms.len(),
-                self.meta.swarms.len()
-            )));
-        }
+        super::check_frame_order("glTF", &self.meta, self.next_frame, frame)?;
         let first = frame.frame == self.meta.frame_start;
         if first {
             self.ids = frame.swarms.iter().map(|s| s.ids.clone()).collect();
@@ -322,14 +309,7 @@ impl CacheWriter for GltfWriter {
     }
 
     fn finish(mut self: Box<Self>) -> Result<Vec<SealedFile>> {
-        if self.next_frame != self.meta.frame_end + 1 {
-            return Err(Error::bake(format!(
-                "glTF writer: finished after frame {} of {}..={}",
-                self.next_frame - 1,
-                self.meta.frame_start,
-                self.meta.frame_end
-            )));
-        }
+        super::check_all_frames_written("glTF", &self.meta, self.next_frame)?;
         let spill = self.spill.take().expect("spill open until finish");
         spill
             .into_inner()
