@@ -76,6 +76,18 @@ def _table_body(d, lines):
         lines.append(f"{_key(k)} = {value(v)}")
 
 
+def _table(header, name, d, subtables, lines):
+    """A table (or array-of-tables entry) `d` under `header`, with the keys named in
+    `subtables` written after it as [name.key] tables."""
+    lines.append(header)
+    _table_body({sk: sv for sk, sv in d.items() if sk not in subtables}, lines)
+    lines.append("")
+    for sk in subtables:
+        lines.append(f"[{name}.{_key(sk)}]")
+        _table_body(d[sk], lines)
+        lines.append("")
+
+
 def dumps(doc, header=None):
     """doc: {section: dict | list[dict]}; scalar top-level keys are written first."""
     lines = []
@@ -89,22 +101,11 @@ def dumps(doc, header=None):
         if k in scalars:
             continue
         if isinstance(v, dict):
-            sub = {sk: sv for sk, sv in v.items() if isinstance(sv, dict) and sv}
-            lines.append(f"[{_key(k)}]")
-            _table_body({sk: sv for sk, sv in v.items() if sk not in sub}, lines)
-            lines.append("")
-            for sk, sv in sub.items():
-                lines.append(f"[{_key(k)}.{_key(sk)}]")
-                _table_body(sv, lines)
-                lines.append("")
+            sub = [sk for sk, sv in v.items() if isinstance(sv, dict) and sv]
+            _table(f"[{_key(k)}]", _key(k), v, sub, lines)
         else:
             for item in v:
-                sub = {sk: sv for sk, sv in item.items() if isinstance(sv, dict) and sk == "params" and sv}
-                lines.append(f"[[{_key(k)}]]")
-                _table_body({sk: sv for sk, sv in item.items() if sk not in sub}, lines)
-                lines.append("")
-                for sk, sv in sub.items():
-                    lines.append(f"[{_key(k)}.{_key(sk)}]")
-                    _table_body(sv, lines)
-                    lines.append("")
+                # Only params becomes a [swarm.params] table; other dicts stay inline.
+                sub = [sk for sk, sv in item.items() if isinstance(sv, dict) and sk == "params" and sv]
+                _table(f"[[{_key(k)}]]", _key(k), item, sub, lines)
     return "\n".join(lines).rstrip() + "\n"
