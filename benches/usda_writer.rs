@@ -88,7 +88,7 @@ fn main() {
         .unwrap();
     }
     let t1 = Instant::now();
-    let paths = beeswarm::export::atomic::commit_all(w.finish().unwrap()).unwrap();
+    let paths = beeswarm::atomic::commit_all(w.finish().unwrap()).unwrap();
     let t2 = Instant::now();
     let bytes = std::fs::metadata(&paths[0]).unwrap().len();
     println!(

@@ -43,7 +43,7 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
             dir.display()
         ))
     })?;
-    let probe = crate::export::atomic::ScratchFile::new(dir, "write-probe");
+    let probe = crate::atomic::ScratchFile::new(dir, "write-probe");
     std::fs::write(&probe.path, b"").map_err(|e| {
         Error::input(format!(
             "the output folder {} is not writable: {e}",
@@ -126,7 +126,7 @@ pub fn bake(
                         for w in writers {
                             sealed.extend(w.finish()?);
                         }
-                        return export::atomic::commit_all(sealed);
+                        return crate::atomic::commit_all(sealed);
                     }
                 }
             }

@@ -8,11 +8,13 @@
 // failed run, so boxing it to shrink `Result` would buy nothing.
 #![allow(clippy::result_large_err)]
 
+pub mod atomic;
 pub mod bake;
 pub mod cli;
 pub mod error;
 pub mod export;
 pub mod field;
+pub mod geometry;
 pub mod math;
 pub mod model;
 pub mod shot;
@@ -21,3 +23,4 @@ pub mod sim;
 pub use error::{Error, Result};
 pub mod eval;
 pub mod plot;
+pub mod progress;

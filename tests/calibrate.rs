@@ -115,7 +115,7 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
         population: 4,
         seed: 3,
         threads: 1,
-        progress: beeswarm::cli::progress::Mode::None,
+        progress: beeswarm::progress::Mode::None,
         figure: None,
         bins: 20,
         name: None,

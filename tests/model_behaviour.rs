@@ -2,8 +2,8 @@
 
 mod common;
 
+use beeswarm::geometry::signed_distance;
 use beeswarm::sim::Simulation;
-use beeswarm::sim::obstacle::signed_distance;
 use common::*;
 use glam::Vec3;
 

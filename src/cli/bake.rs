@@ -1,9 +1,9 @@
 //! `beeswarm bake`: shot → caches.
 
-use super::progress::{Mode, Reporter};
 use crate::bake::{BakeOptions, INTERRUPTED, bake};
 use crate::error::{Error, Result};
 use crate::export::Format;
+use crate::progress::{Mode, Reporter};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;

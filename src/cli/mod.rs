@@ -4,7 +4,6 @@
 mod bake;
 mod bench;
 mod check;
-pub mod progress;
 
 use crate::error::Error;
 use clap::{Parser, Subcommand};

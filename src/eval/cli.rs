@@ -4,8 +4,8 @@ use super::figure;
 use super::histogram::TAIL;
 use super::report::{Measured, Reference, Report, Settings, compare, measure};
 use super::tracks;
+use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
-use crate::export::atomic::AtomicFile;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

@@ -5,7 +5,7 @@
 //! roll in degrees; sway in metres. Floats use the shortest text that reads back exactly.
 
 use super::CacheWriter;
-use super::atomic::{AtomicFile, SealedFile};
+use crate::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use std::io::Write;

@@ -2,9 +2,8 @@
 //!
 //! Every writer receives frames one at a time (`CacheWriter::write_frame`) so that no
 //! writer needs the whole history of every bee in memory, and every file is written
-//! atomically (see `atomic`): a failed or interrupted bake leaves the previous cache.
+//! atomically (see `crate::atomic`): a failed or interrupted bake leaves the previous cache.
 
-pub mod atomic;
 pub mod csv;
 pub mod gltf;
 pub mod preview;
@@ -14,59 +13,7 @@ use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use std::path::Path;
 
-/// A cache format the bake can write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Format {
-    Glb,
-    Gltf,
-    Usda,
-    Csv,
-}
-
-impl Format {
-    pub const ALL: [Format; 4] = [Format::Glb, Format::Gltf, Format::Usda, Format::Csv];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Format::Glb => "glb",
-            Format::Gltf => "gltf",
-            Format::Usda => "usda",
-            Format::Csv => "csv",
-        }
-    }
-
-    pub fn parse(s: &str) -> Option<Format> {
-        Format::ALL
-            .into_iter()
-            .find(|f| f.name() == s.trim().to_ascii_lowercase())
-    }
-
-    /// The file a format writes for a shot (gltf also writes `<name>.bin` beside it).
-    pub fn file_name(self, shot_name: &str) -> String {
-        match self {
-            Format::Csv => format!("{shot_name}.tracks.csv"),
-            f => format!("{shot_name}.{}", f.name()),
-        }
-    }
-}
-
-/// Per-format settings from the shot's `[output]` table.
-#[derive(Clone, Debug, PartialEq)]
-pub struct OutputOptions {
-    /// Visible wing flap rate written to glTF wing tracks, Hz. 0 = a static blurred pose.
-    pub gltf_wing_flap_hz: f64,
-    /// Split USDA time samples into value clips of this many frames (0 = one file).
-    pub usda_clip_frames: u32,
-}
-
-impl Default for OutputOptions {
-    fn default() -> Self {
-        OutputOptions {
-            gltf_wing_flap_hz: 0.0,
-            usda_clip_frames: 0,
-        }
-    }
-}
+pub use crate::shot::{Format, OutputOptions};
 
 /// A writer that receives every recorded frame in order, then is finished.
 pub trait CacheWriter: Send {
@@ -75,7 +22,7 @@ pub trait CacheWriter: Send {
     /// Completes the files and returns them sealed under temporary names, in the order
     /// they must be renamed into place (the bake renames them only once every writer has
     /// sealed, so a failure in any format leaves every previous cache untouched).
-    fn finish(self: Box<Self>) -> Result<Vec<atomic::SealedFile>>;
+    fn finish(self: Box<Self>) -> Result<Vec<crate::atomic::SealedFile>>;
 }
 
 /// The frame contract of writers that lay out their files from the first frame: frames

@@ -8,7 +8,7 @@
 //! stride of frames beyond).
 
 use super::CacheWriter;
-use super::atomic::{AtomicFile, SealedFile};
+use crate::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::plot::{Canvas, Chart, Legend, LegendMark, Rgb, palette};
 use crate::shot::{Obstacle, Shape, Shot, Target, TargetKind};
@@ -372,7 +372,7 @@ keys = [{ frame = 1, position = [0.0, 1.2, 0.0] }, { frame = 30, position = [0.4
             };
             w.write_frame(&frame).unwrap();
         }
-        let out = crate::export::atomic::commit_all(w.finish().unwrap()).unwrap();
+        let out = crate::atomic::commit_all(w.finish().unwrap()).unwrap();
         assert_eq!(out.len(), 1);
         out[0].clone()
     }

@@ -30,7 +30,7 @@ mod bee;
 mod text;
 
 use super::CacheWriter;
-use super::atomic::{AtomicFile, ScratchFile, SealedFile};
+use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame, SwarmFrame};
 use glam::Vec3;
@@ -975,7 +975,7 @@ mod tests {
                 swarms: &swarms,
             })?;
         }
-        crate::export::atomic::commit_all(w.finish()?)
+        crate::atomic::commit_all(w.finish()?)
     }
 
     fn files(dir: &Path) -> Vec<String> {
@@ -1095,7 +1095,7 @@ mod tests {
             swarms: std::slice::from_ref(&s),
         })
         .unwrap();
-        crate::export::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
+        crate::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
         let t = std::fs::read_to_string(&path).unwrap();
         // (w, x, y, z): identity, then 90° about +Y = (0.7071, 0, 0.7071, 0) in half.
         assert!(t.contains("quath[] orientations.timeSamples = {\n            0: [(1, 0, 0, 0), (0.707, 0, 0.707, 0)],\n"));

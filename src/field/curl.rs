@@ -4,12 +4,15 @@
 //! F_curl = ∇ × ψ. With ξ = r/L, ∂ψ/∂r = (ε / L²) ∂Per/∂ξ, so the curl is
 //! (ε / L²) (∇_ξ × Per) — computed from the analytic noise gradients, hence exactly
 //! divergence-free. L is given in metres and converted to scene units
-//! ([`crate::model::params::SCENE_UNIT_M`]); the result is an acceleration in m/s²
+//! ([`SCENE_UNIT_M`]); the result is an acceleration in m/s²
 //! (one scene force unit per unit mass = 1 m/s², see docs/model.md).
 
 use super::noise::{LatticePoint, Perlin};
-use crate::model::params::SCENE_UNIT_M;
 use glam::Vec3;
+
+/// Metres per scene length unit of paper 000, whose Table I (h, L) and Eq. 8's gain are
+/// stated in unstated scene units: a few bee lengths (docs/model.md).
+pub const SCENE_UNIT_M: f64 = 0.05;
 
 #[derive(Clone, Debug)]
 pub struct CurlNoise {

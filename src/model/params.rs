@@ -4,8 +4,7 @@
 //! [`SCENE_UNIT_M`] metres (a few bee lengths, see docs/model.md), so Table I's
 //! h = 3 becomes 0.15 m and L = 2.2 becomes 0.11 m. Times are seconds.
 
-/// Metres per scene length unit of paper 000 (Table I's h and L).
-pub const SCENE_UNIT_M: f64 = 0.05;
+pub use crate::field::curl::SCENE_UNIT_M;
 
 /// Every tunable of the bee model. Lengths in metres, speeds in m/s, times in seconds.
 #[derive(Clone, Debug, PartialEq)]

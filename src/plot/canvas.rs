@@ -6,8 +6,8 @@
 //! (floating-point blending differs in the last bit between compilers and CPUs).
 
 use super::font::{GLYPH, glyph};
+use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
-use crate::export::atomic::AtomicFile;
 use std::path::{Path, PathBuf};
 
 pub type Rgb = [u8; 3];

@@ -5,13 +5,15 @@
 
 pub mod defaults;
 pub mod locate;
+mod output;
 mod resolve;
 pub mod schema;
 
 use crate::error::ShotError;
-use crate::export::{Format, OutputOptions};
+pub use crate::geometry::Shape;
 use crate::model::BeeParams;
-use glam::{Quat, Vec3};
+use glam::Vec3;
+pub use output::{Format, OutputOptions};
 use std::path::{Path, PathBuf};
 
 /// The default shot baked by `beeswarm bake` without a file.
@@ -136,39 +138,6 @@ pub struct BeeBody {
 pub struct Obstacle {
     pub name: String,
     pub shape: Shape,
-}
-
-/// Obstacle geometry. Rotations are body → world.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Shape {
-    Sphere {
-        center: Vec3,
-        radius: f32,
-    },
-    /// Oriented box: centre, half extents, rotation.
-    Box {
-        center: Vec3,
-        half: Vec3,
-        rotation: Quat,
-    },
-    /// A shaft: segment a–b with round ends.
-    Capsule {
-        a: Vec3,
-        b: Vec3,
-        radius: f32,
-    },
-    /// Flat-capped cylinder along its local +Y, `half_height` each way from the centre.
-    Cylinder {
-        center: Vec3,
-        radius: f32,
-        half_height: f32,
-        rotation: Quat,
-    },
-    /// Infinite plane through `point`; bees stay on the `normal` side.
-    Plane {
-        point: Vec3,
-        normal: Vec3,
-    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

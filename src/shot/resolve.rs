@@ -6,8 +6,8 @@ use super::locate::Locator;
 use super::schema::*;
 use super::*;
 use crate::error::ShotError;
-use crate::export::Format;
 use crate::model::BeeParams;
+use glam::Quat;
 
 struct Ctx<'a> {
     file: &'a Path,
@@ -395,7 +395,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             dir: base.join(dir),
             formats,
             preview: ro.preview.unwrap_or(false),
-            options: crate::export::OutputOptions {
+            options: OutputOptions {
                 gltf_wing_flap_hz: wing_flap_hz,
                 usda_clip_frames,
             },
@@ -1021,7 +1021,7 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
                     if !shot
                         .obstacles
                         .iter()
-                        .any(|o| crate::sim::obstacle::signed_distance(&o.shape, p) < 0.0)
+                        .any(|o| crate::geometry::signed_distance(&o.shape, p) < 0.0)
                     {
                         all_inside = false;
                         break 'grid;

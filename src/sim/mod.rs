@@ -1,7 +1,6 @@
-//! The simulation: world state, stepping, neighbour grid, obstacles, and what is recorded.
+//! The simulation: world state, stepping, neighbour grid, and what is recorded.
 pub mod frame;
 pub mod grid;
-pub mod obstacle;
 pub mod world;
 
 pub use frame::{CacheMeta, Frame, SwarmFrame, SwarmMeta};

@@ -5,8 +5,8 @@
 
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
 use super::grid::Grid;
-use super::obstacle;
 use crate::field::CurlNoise;
+use crate::geometry as obstacle;
 use crate::math::{self, Rng, normalize_or};
 use crate::model::kernels::Kernels;
 use crate::model::{boids, brownian, collision, oscillation, repulsion, targets, vision};

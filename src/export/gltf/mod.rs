@@ -25,8 +25,8 @@ mod mesh;
 
 pub use mesh::{BeeMesh, Primitive};
 
-use super::atomic::{AtomicFile, ScratchFile, SealedFile};
 use super::{CacheWriter, OutputOptions};
+use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use glam::{Quat, Vec3};

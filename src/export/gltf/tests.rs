@@ -114,7 +114,7 @@ impl Bake {
         }
         // Committed .bin first (so a .gltf never points at an old buffer); list the
         // document first.
-        let mut paths = crate::export::atomic::commit_all(w.finish().unwrap()).unwrap();
+        let mut paths = crate::atomic::commit_all(w.finish().unwrap()).unwrap();
         paths.sort_by_key(|p| p.extension().is_some_and(|e| e == "bin"));
         paths
     }
@@ -723,7 +723,7 @@ fn gltf_writer_throughput() {
             in_frames += t.elapsed();
         }
         let t = std::time::Instant::now();
-        let paths = crate::export::atomic::commit_all(w.finish().unwrap()).unwrap();
+        let paths = crate::atomic::commit_all(w.finish().unwrap()).unwrap();
         let finish = t.elapsed();
         let size: u64 = paths
             .iter()

@@ -1,9 +1,42 @@
-//! Obstacle geometry: signed distance, closest surface point and outward normal.
+//! Obstacle geometry, below both `shot` (validation) and `sim` (flight): the shapes, and
+//! their signed distance, closest surface point and outward normal.
 //! Distances in metres; negative inside. Degenerate inputs (a point exactly on an axis or
 //! at a centre) get a well-defined normal instead of NaN.
 
-use crate::shot::Shape;
-use glam::Vec3;
+use glam::{Quat, Vec3};
+
+/// Obstacle geometry. Rotations are body → world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// Oriented box: centre, half extents, rotation.
+    Box {
+        center: Vec3,
+        half: Vec3,
+        rotation: Quat,
+    },
+    /// A shaft: segment a–b with round ends.
+    Capsule {
+        a: Vec3,
+        b: Vec3,
+        radius: f32,
+    },
+    /// Flat-capped cylinder along its local +Y, `half_height` each way from the centre.
+    Cylinder {
+        center: Vec3,
+        radius: f32,
+        half_height: f32,
+        rotation: Quat,
+    },
+    /// Infinite plane through `point`; bees stay on the `normal` side.
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+    },
+}
 
 /// Where a point stands relative to an obstacle.
 #[derive(Clone, Copy, Debug, PartialEq)]
