@@ -45,7 +45,7 @@ variant() { # model preset > shot
         "${bare[@]}" examples/mosquito_cage.toml
 }
 
-# 1. Calibrate. Every model starts from the built-in "nest" preset; the bee model fits
+# 1. Calibrate. Every model starts from its default preset ("nest" for the bee model); the bee model fits
 #    Γ = {κ1, κ2, κ3, L, ε, h} and the speed (d0 is set by the shot), the baselines
 #    (which read only the speed) fit the speed.
 variant bee nest > "$OUT/calibrate_bee.toml"
@@ -57,7 +57,7 @@ if [ "$CALIBRATE" != 0 ]; then
         --figure docs/img/mosquito_cage_fitness.png --progress bar
 fi
 for m in brownian boids; do
-    variant "$m" nest > "$OUT/calibrate_$m.toml"
+    variant "$m" default > "$OUT/calibrate_$m.toml"
     "$BIN" calibrate --reference "$REAL" --shot "$OUT/calibrate_$m.toml" \
         --out "$OUT/mosquito_cage_$m.preset.toml" --name "mosquito_cage_$m" --only speed \
         --generations "$BASELINE_GENERATIONS" --population 10 --seed "$GA_SEED" --seeds "$SEEDS" --progress none

@@ -19,7 +19,13 @@ fn imports() -> BTreeMap<String, BTreeSet<String>> {
         collect(&path, &mut files);
         let deps = out.entry(name.clone()).or_default();
         for f in files {
-            let text = std::fs::read_to_string(&f).unwrap();
+            let source = std::fs::read_to_string(&f).unwrap();
+            // Code only: a doc comment may name a module it does not import.
+            let text: String = source
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .collect::<Vec<_>>()
+                .join("\n");
             for (k, _) in text.match_indices("crate::") {
                 let rest = &text[k + "crate::".len()..];
                 let m: String = rest
@@ -33,6 +39,11 @@ fn imports() -> BTreeMap<String, BTreeSet<String>> {
                 }
             }
         }
+    }
+    // Only names of top-level modules count (`crate::declare_params!` is a macro).
+    let modules: BTreeSet<String> = out.keys().cloned().collect();
+    for deps in out.values_mut() {
+        deps.retain(|d| modules.contains(d));
     }
     out
 }

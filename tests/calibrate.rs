@@ -154,7 +154,10 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
     let loaded = shot::load(&user_path).unwrap();
     let p = &loaded.swarms[0].params;
     assert!(
-        text.contains(&format!("speed = {}", toml::Value::Float(p.speed))),
+        text.contains(&format!(
+            "speed = {}",
+            toml::Value::Float(p.get("speed").unwrap())
+        )),
         "{text}"
     );
 

@@ -441,7 +441,7 @@ fn values_out_of_range_say_the_range() {
         &[
             "shot.toml:3:10:",
             "key `swarm[0].preset`",
-            "expected one of \"grassland\", \"nest\", \"optimized\" or a preset file",
+            "the bee model has no preset \"meadow\": expected one of \"nest\", \"grassland\", \"optimized\" or a preset file",
         ],
     );
     let err = refuse("[[swarm]]\ncount = 3\n[output]\nformats = [\"csv\", \"fbx\"]\n");
@@ -756,7 +756,7 @@ fn bad_bench_options_name_the_option() {
         ),
         (
             &["--preset", "meadow"][..],
-            "error: --preset: expected one of \"grassland\", \"nest\", \"optimized\"",
+            "error: --preset: the bee model has no preset \"meadow\": expected one of \"nest\", \"grassland\", \"optimized\"",
         ),
         (
             &["--frames", "200000"][..],

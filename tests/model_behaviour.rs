@@ -354,7 +354,7 @@ fn vertical_oscillation_peaks_at_the_maneuvering_frequency() {
         if p > bp { (f, p) } else { (bf, bp) }
     });
     let unit = beeswarm::model::BeeParams::nest().oscillation_time_unit;
-    let expected = 1.0 / (beeswarm::model::oscillation::PITCH_PERIOD * unit);
+    let expected = 1.0 / (beeswarm::model::bee::oscillation::PITCH_PERIOD * unit);
     println!(
         "vertical spectrum peak {:.3} Hz, Eq. 3 frequency {:.3} Hz",
         peak.0, expected

@@ -44,22 +44,24 @@ pub fn summary(shot: &Shot) -> String {
         shot.bee_count()
     );
     for w in &shot.swarms {
-        let p = &w.params;
         let _ = writeln!(
             s,
-            "    {}: {} bees, model {}, preset {} (κ1 {} κ2 {} κ3 {}, L {} m, ε {}, h {} m, speed {} m/s)",
+            "    {}: {} bees, model {}, preset {}",
             w.name,
             w.count,
             w.model.name(),
             w.preset,
-            num(p.kappa1),
-            num(p.kappa2),
-            num(p.kappa3),
-            num(p.noise_cell),
-            num(p.noise_gain),
-            num(p.neighbour_radius),
-            num(p.speed)
         );
+        // Every parameter with its unit, so a TD sees what the preset and overrides gave.
+        let params: Vec<String> = w
+            .params
+            .iter()
+            .map(|(p, v)| match p.unit {
+                "1" => format!("{} {}", p.name, num(v)),
+                u => format!("{} {} {u}", p.name, num(v)),
+            })
+            .collect();
+        let _ = writeln!(s, "      params: {}", params.join(", "));
     }
     let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
     for o in &shot.obstacles {

@@ -17,7 +17,7 @@ use super::resample::resample;
 use super::tracks::{self, Dataset, Track, TrackFormat};
 use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
-use crate::model::BeeParams;
+use crate::model::{ModelKind, ParamValues};
 use crate::plot::{Canvas, Chart, Legend, LegendMark, palette};
 use crate::progress::Mode;
 use crate::shot::Shot;
@@ -174,28 +174,33 @@ pub fn select(only: &[String]) -> Result<Vec<ParamRange>> {
     Ok(out)
 }
 
-/// Applies genes (one per entry of `space`) to parameters.
-pub fn apply(space: &[ParamRange], genes: &[f64], p: &mut BeeParams) {
+/// Applies genes (one per entry of `space`) to parameters. A key the model does not have
+/// is left alone (`check_space` refuses such a search up front).
+pub fn apply(space: &[ParamRange], genes: &[f64], p: &mut ParamValues) {
     for (r, &g) in space.iter().zip(genes) {
-        let v = r.value(g);
-        match r.key {
-            "kappa1" => p.kappa1 = v,
-            "kappa2" => p.kappa2 = v,
-            "kappa3" => p.kappa3 = v,
-            "noise_cell" => p.noise_cell = v,
-            "noise_gain" => p.noise_gain = v,
-            "neighbour_radius" => p.neighbour_radius = v,
-            "speed" => p.speed = v,
-            "avoid_distance" => p.avoid_distance = v,
-            "heading_lag" => p.heading_lag = v,
-            "speed_wander" => p.speed_wander = v,
-            "speed_wander_time" => p.speed_wander_time = v,
-            "surface_speed" => p.surface_speed = v,
-            "surface_speed_distance" => p.surface_speed_distance = v,
-            "attraction" => p.attraction = v,
-            other => unreachable!("unknown calibrated parameter {other}"),
+        p.set(r.key, r.value(g));
+    }
+}
+
+/// Every searched parameter must be one of the calibrated swarm's model.
+fn check_space(space: &[ParamRange], shot: &Shot) -> Result<()> {
+    for s in &shot.swarms {
+        if let Some(r) = space.iter().find(|r| s.params.get(r.key).is_none()) {
+            return Err(Error::input(format!(
+                "swarm \"{}\" flies the {} model, which has no parameter \"{}\"; pick the \
+                 searched parameters with --only (its parameters: {})",
+                s.name,
+                s.model.name(),
+                r.key,
+                s.params
+                    .iter()
+                    .map(|(p, _)| p.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
         }
     }
+    Ok(())
 }
 
 /// Runs a shot in memory and returns every bee's track (time = seconds since the first
@@ -370,6 +375,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         )));
     }
     let space = select(&args.only)?;
+    check_space(&space, &shot)?;
     let real = tracks::read(&args.reference)?;
     let dt = super::cli::default_dt(&[real.median_step(), 1.0 / shot.fps])
         .ok_or_else(|| Error::input("the reference has no track with two samples"))?;
@@ -446,7 +452,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "calibrated".to_owned())
     });
-    let base = base_preset(&shot.swarms[0].preset, &args.shot);
+    let base = base_preset(shot.swarms[0].model, &shot.swarms[0].preset, &args.shot);
     let provenance = format!(
         "{}\n{} generations x {} individuals (crossover {}, mutation {}, elitism {}), GA seed {}, \
          {} simulation seed(s) from {}, \
@@ -493,8 +499,8 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
 
 /// The built-in preset a calibrated preset is based on: the swarm's own, or the base of
 /// the preset file it loaded.
-fn base_preset(preset: &str, shot_path: &Path) -> String {
-    if BeeParams::preset(preset).is_some() {
+fn base_preset(model: ModelKind, preset: &str, shot_path: &Path) -> String {
+    if ParamValues::preset(model, preset).is_some() {
         return preset.to_owned();
     }
     let path = shot_path.parent().unwrap_or(Path::new(".")).join(preset);
@@ -502,8 +508,8 @@ fn base_preset(preset: &str, shot_path: &Path) -> String {
         .ok()
         .and_then(|s| toml::from_str::<crate::shot::schema::RawPresetFile>(&s).ok())
         .and_then(|p| p.preset.base)
-        .filter(|b| BeeParams::preset(b).is_some())
-        .unwrap_or_else(|| crate::shot::defaults::PRESET.to_owned())
+        .filter(|b| ParamValues::preset(model, b).is_some())
+        .unwrap_or_else(|| model.default_preset().to_owned())
 }
 
 /// The preset file: header with provenance, then every parameter (not only the calibrated
@@ -513,52 +519,36 @@ pub fn preset_toml(
     base: &str,
     shot: &Shot,
     space: &[ParamRange],
-    p: &BeeParams,
+    p: &ParamValues,
     provenance: &str,
 ) -> String {
     let q = |s: &str| toml::Value::String(s.to_owned()).to_string();
+    let model = shot.swarms[0].model.name();
     let mut s = String::new();
     s += "# Written by `beeswarm calibrate`; load it with `preset = \"<this file>\"` in a swarm.\n";
     s += "[preset]\n";
     s += &format!("name = {}\n", q(name));
+    s += &format!("model = {}\n", q(model));
     s += &format!("base = {}\n", q(base));
     s += &format!(
         "description = {}\n",
         q(&format!(
-            "{} model calibrated with a genetic algorithm (paper 000 Sec. VI) on shot \"{}\"",
-            shot.swarms[0].model.name(),
+            "{model} model calibrated with a genetic algorithm (paper 000 Sec. VI) on shot \"{}\"",
             shot.name
         ))
     );
     s += &format!("provenance = {}\n\n", q(provenance));
     s += "[params]\n";
     let calibrated = |k: &str| space.iter().any(|r| r.key == k);
-    for (k, v) in [
-        ("kappa1", p.kappa1),
-        ("kappa2", p.kappa2),
-        ("kappa3", p.kappa3),
-        ("noise_cell", p.noise_cell),
-        ("noise_gain", p.noise_gain),
-        ("neighbour_radius", p.neighbour_radius),
-        ("speed", p.speed),
-        ("avoid_distance", p.avoid_distance),
-        ("heading_lag", p.heading_lag),
-        ("speed_wander", p.speed_wander),
-        ("speed_wander_time", p.speed_wander_time),
-        ("surface_speed", p.surface_speed),
-        ("surface_speed_distance", p.surface_speed_distance),
-        ("fov_deg", p.fov_deg),
-        ("roll_max_deg", p.roll_max_deg),
-        ("oscillation_time_unit", p.oscillation_time_unit),
-        ("pressure_stiffness", p.pressure_stiffness),
-        ("collision_stiffness", p.collision_stiffness),
-        ("attraction", p.attraction),
-        ("containment", p.containment),
-    ] {
+    for (spec, v) in p.iter() {
         // Six significant digits: plenty for a fitted value, and readable.
         let v: f64 = format!("{v:.6e}").parse().unwrap_or(v);
-        let note = if calibrated(k) { "  # calibrated" } else { "" };
-        s += &format!("{k} = {}{note}\n", toml::Value::Float(v));
+        let note = if calibrated(spec.name) {
+            "  # calibrated"
+        } else {
+            ""
+        };
+        s += &format!("{} = {}{note}\n", spec.name, toml::Value::Float(v));
     }
     s
 }

@@ -3,7 +3,10 @@
 //! Distances in metres; negative inside. Degenerate inputs (a point exactly on an axis or
 //! at a centre) get a well-defined normal instead of NaN.
 
+pub mod grid;
+
 use glam::{Quat, Vec3};
+pub use grid::Grid;
 
 /// Obstacle geometry. Rotations are body → world.
 #[derive(Clone, Copy, Debug, PartialEq)]

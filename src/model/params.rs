@@ -1,115 +1,164 @@
-//! Model parameters of paper 000 at real scale, and the paper's Table I presets.
-//!
-//! The paper works in unstated scene units. We map one scene length unit to
-//! [`SCENE_UNIT_M`] metres (a few bee lengths, see docs/model.md), so Table I's
-//! h = 3 becomes 0.15 m and L = 2.2 becomes 0.11 m. Times are seconds.
+//! Model parameters, declared once per model: name, unit, default, valid range, the phrase
+//! an error uses for the range, and a one-line doc. The shot loader validates
+//! `params = { … }` against these, `beeswarm models` lists them, and docs/models.md is
+//! generated from them.
 
-pub use crate::field::curl::SCENE_UNIT_M;
+use super::ModelKind;
 
-/// Every tunable of the bee model. Lengths in metres, speeds in m/s, times in seconds.
+/// One tunable of a model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    /// SI unit as written in the docs ("m", "m/s", "s", "deg", "1" for a plain number).
+    pub unit: &'static str,
+    pub default: f64,
+    /// Valid range, inclusive.
+    pub min: f64,
+    pub max: f64,
+    /// What a valid value is, for error messages: "a weight from 0 to 100".
+    pub expected: &'static str,
+    pub doc: &'static str,
+}
+
+/// A named set of parameter values over a model's defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Preset {
+    pub name: &'static str,
+    pub doc: &'static str,
+    /// (parameter, value) for every parameter that differs from the default.
+    pub values: &'static [(&'static str, f64)],
+}
+
+/// A model's parameter values, one per [`ParamSpec`] of the model in declaration order.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BeeParams {
-    /// κ1: weight of the body oscillation force F_o (Eq. 1).
-    pub kappa1: f64,
-    /// κ2: weight of the curl-noise force F_curl (Eq. 1).
-    pub kappa2: f64,
-    /// κ3: weight of the repulsion force F_repul (Eq. 1).
-    pub kappa3: f64,
-    /// L: edge length of the noise lattice (Eq. 8), metres.
-    pub noise_cell: f64,
-    /// ε: gain of the noise potential (Eq. 8).
-    pub noise_gain: f64,
-    /// h: SPH neighbourhood radius (Eq. 10–11), metres.
-    pub neighbour_radius: f64,
-    /// Preferred cruising speed, m/s: the speed at which drag balances mean thrust.
-    pub speed: f64,
-    /// d0: distance at which a bee starts avoiding an obstacle it sees (Eq. 5–6), metres.
-    pub avoid_distance: f64,
-    /// σ of the preferred speed's slow wandering over time, in natural-log units (0: a
-    /// constant preferred speed).
-    pub speed_wander: f64,
-    /// Correlation time of that wandering, seconds.
-    pub speed_wander_time: f64,
-    /// Optic-flow speed control: the preferred speed at a surface, as a fraction of
-    /// `speed` (1: no slowing). See [`surface_speed_factor`](crate::model::vision::surface_speed_factor).
-    pub surface_speed: f64,
-    /// Distance over which the preferred speed recovers from `surface_speed` towards
-    /// `speed` (e-folding length), metres.
-    pub surface_speed_distance: f64,
-    /// Time constant with which the body's heading follows the direction of travel,
-    /// seconds (Sec. V-A: the body and the velocity need not align).
-    pub heading_lag: f64,
-    /// Half-angle of the field of view (Sec. IV-B: ±45°), degrees.
-    pub fov_deg: f64,
-    /// Largest roll-to-avoid angle (Eq. 6: 45°), degrees.
-    pub roll_max_deg: f64,
-    /// Seconds per unit of t in the maneuvering functions Eq. 3–4.
-    pub oscillation_time_unit: f64,
-    /// Pressure stiffness k in p = k (ρ − ρ0) (Eq. 11), m²/s² per unit density ratio.
-    pub pressure_stiffness: f64,
-    /// Spring stiffness of bee-bee contact (Sec. VII), 1/s².
-    pub collision_stiffness: f64,
-    /// Scale of target attraction (multiplies each target's strength).
-    pub attraction: f64,
-    /// Acceleration pulling bees back inside the swarm bounds, m/s² per metre outside.
-    pub containment: f64,
+pub struct ParamValues {
+    model: ModelKind,
+    values: Vec<f64>,
 }
 
-impl BeeParams {
-    /// Table I "over grassland" (1000 bees).
-    pub fn grassland() -> Self {
-        Self::from_table(3.0, 2.2, 1.5, 5.0, 0.9, 2.0)
-    }
-    /// Table I "around nest" (350 bees).
-    pub fn nest() -> Self {
-        Self::from_table(3.0, 2.2, 1.0, 2.5, 1.7, 2.0)
-    }
-    /// Table I "optimized values" (the genetic algorithm's result in the paper).
-    pub fn optimized() -> Self {
-        Self::from_table(3.0, 2.7, 1.4, 2.3, 1.2, 1.7)
-    }
-
-    /// A preset by name.
-    pub fn preset(name: &str) -> Option<Self> {
-        match name {
-            "grassland" => Some(Self::grassland()),
-            "nest" => Some(Self::nest()),
-            "optimized" => Some(Self::optimized()),
-            _ => None,
+impl ParamValues {
+    /// Every parameter at its default.
+    pub fn defaults(model: ModelKind) -> Self {
+        ParamValues {
+            model,
+            values: model.info().params.iter().map(|p| p.default).collect(),
         }
     }
 
-    pub const PRESETS: [&'static str; 3] = ["grassland", "nest", "optimized"];
+    /// A built-in preset of `model` by name.
+    pub fn preset(model: ModelKind, name: &str) -> Option<Self> {
+        let preset = model.info().presets.iter().find(|p| p.name == name)?;
+        let mut v = Self::defaults(model);
+        for (k, x) in preset.values {
+            let known = v.set(k, *x);
+            debug_assert!(known, "preset {name} of {} names `{k}`", model.name());
+        }
+        Some(v)
+    }
 
-    /// Builds parameters from Table I's scene-unit values.
-    fn from_table(h: f64, l: f64, k1: f64, k2: f64, k3: f64, eps: f64) -> Self {
-        BeeParams {
-            kappa1: k1,
-            kappa2: k2,
-            kappa3: k3,
-            noise_cell: l * SCENE_UNIT_M,
-            noise_gain: eps,
-            neighbour_radius: h * SCENE_UNIT_M,
-            speed: 1.0,
-            avoid_distance: 0.12,
-            heading_lag: 0.06,
-            speed_wander: 0.0,
-            speed_wander_time: 2.0,
-            surface_speed: 1.0,
-            surface_speed_distance: 0.15,
-            fov_deg: 45.0,
-            roll_max_deg: 45.0,
-            oscillation_time_unit: 0.005,
-            pressure_stiffness: 1.0,
-            collision_stiffness: 4000.0,
-            attraction: 1.0,
-            containment: 4.0,
+    pub fn model(&self) -> ModelKind {
+        self.model
+    }
+
+    fn index(&self, name: &str) -> Option<usize> {
+        self.model.info().params.iter().position(|p| p.name == name)
+    }
+
+    /// The value of parameter `name`, or `None` if the model has no such parameter.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.index(name).map(|i| self.values[i])
+    }
+
+    /// Sets parameter `name`; false if the model has no such parameter.
+    pub fn set(&mut self, name: &str, value: f64) -> bool {
+        match self.index(name) {
+            Some(i) => {
+                self.values[i] = value;
+                true
+            }
+            None => false,
         }
     }
-}
 
-impl Default for BeeParams {
-    fn default() -> Self {
-        Self::nest()
+    /// (spec, value) pairs in declaration order.
+    pub fn iter(&self) -> impl Iterator<Item = (&'static ParamSpec, f64)> + '_ {
+        self.model
+            .info()
+            .params
+            .iter()
+            .zip(self.values.iter().copied())
+    }
+
+    /// The values in declaration order (what a model's typed view reads).
+    pub fn values(&self) -> &[f64] {
+        &self.values
     }
 }
+
+/// Declares a model's parameters once: the typed struct the model reads (`f64` fields,
+/// SI units) and its `SPECS` table, in the same order.
+///
+/// ```ignore
+/// declare_params! {
+///     /// Parameters of the X model.
+///     pub struct XParams {
+///         /// Preferred speed.
+///         speed: "m/s", 1.0, [0.01, 50.0], "a speed from 0.01 to 50 m/s";
+///     }
+/// }
+/// ```
+#[macro_export]
+#[doc(hidden)]
+macro_rules! declare_params {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $(
+                #[doc = $doc:literal]
+                $field:ident : $unit:literal, $default:expr, [$min:expr, $max:expr], $expected:literal;
+            )*
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug, PartialEq)]
+        pub struct $name {
+            $( #[doc = $doc] pub $field: f64, )*
+        }
+
+        impl $name {
+            /// Every parameter, in declaration order.
+            pub const SPECS: &'static [$crate::model::params::ParamSpec] = &[
+                $( $crate::model::params::ParamSpec {
+                    name: stringify!($field),
+                    unit: $unit,
+                    default: $default,
+                    min: $min,
+                    max: $max,
+                    expected: $expected,
+                    doc: $doc.trim_ascii(),
+                }, )*
+            ];
+
+            /// The typed view of validated values of this model.
+            pub fn from_values(v: &$crate::model::params::ParamValues) -> Self {
+                let mut it = v.values().iter().copied();
+                let out = $name { $( $field: it.next().expect(stringify!($field)), )* };
+                debug_assert!(it.next().is_none(), "values of another model");
+                out
+            }
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                $name { $( $field: $default, )* }
+            }
+        }
+    };
+}
+
+/// The preset list of a model whose only preset is its defaults.
+pub const DEFAULTS_ONLY: &[Preset] = &[Preset {
+    name: "default",
+    doc: "the defaults",
+    values: &[],
+}];

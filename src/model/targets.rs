@@ -7,6 +7,25 @@
 use crate::math::{normalize_or, smoothstep};
 use glam::Vec3;
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TargetKind {
+    /// A hive entrance: attracts, and is sampled with virtual particles that push back.
+    Nest,
+    /// A flower: like a nest, smaller and weaker by default.
+    Flower,
+    /// A pure attractor, with no body.
+    Attractor,
+    /// A landing surface: pulls towards a plane rather than a point, with no body.
+    Surface,
+}
+
+impl TargetKind {
+    /// Whether the target has a body that agents feel (sampled with virtual particles).
+    pub fn has_body(self) -> bool {
+        matches!(self, TargetKind::Nest | TargetKind::Flower)
+    }
+}
+
 /// Attraction acceleration towards `target` (m/s²).
 #[inline]
 pub fn attraction(p: Vec3, target: Vec3, strength: f32, reach: f32) -> Vec3 {

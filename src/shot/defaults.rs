@@ -8,7 +8,7 @@ pub const SEED: i64 = 1;
 
 pub const SWARM_NAME: &str = "swarm";
 pub const MODEL: &str = "bee";
-pub const PRESET: &str = "nest";
+
 pub const SPAWN_CENTER: [f64; 3] = [0.0, 1.0, 0.0];
 pub const SPAWN_SIZE: [f64; 3] = [1.0, 1.0, 1.0];
 /// Default soft bounds: the spawn box grown by this margin on every side, m.

@@ -104,6 +104,15 @@ impl<'a> Locator<'a> {
         }
     }
 
+    /// Byte span of a path's key (for an error about the key itself, such as an unknown
+    /// name), else of its value.
+    pub fn key_span_of(&self, path: &str) -> Option<Range<usize>> {
+        match self.spans.get(path) {
+            Some((Some(k), _)) => Some(k.clone()),
+            _ => self.span_of(path),
+        }
+    }
+
     /// The path whose key or value span is the innermost one containing `pos`.
     pub fn path_at(&self, pos: usize) -> Option<String> {
         self.spans

@@ -11,7 +11,8 @@ pub mod schema;
 
 use crate::error::ShotError;
 pub use crate::geometry::Shape;
-use crate::model::BeeParams;
+use crate::model::ParamValues;
+pub use crate::model::{Body, ModelKind, TargetKind, Variation};
 use glam::Vec3;
 pub use output::{Format, OutputOptions};
 use std::path::{Path, PathBuf};
@@ -52,26 +53,6 @@ impl Shot {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ModelKind {
-    /// Paper 000's bio-inspired bee model.
-    Bee,
-    /// Baseline: white-noise force with friction.
-    Brownian,
-    /// Baseline: Reynolds' separation, alignment, cohesion.
-    Boids,
-}
-
-impl ModelKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Bee => "bee",
-            ModelKind::Brownian => "brownian",
-            ModelKind::Boids => "boids",
-        }
-    }
-}
-
 #[derive(Clone, Debug)]
 pub struct Swarm {
     /// Identifier-safe name, unique in the shot.
@@ -80,10 +61,11 @@ pub struct Swarm {
     pub model: ModelKind,
     /// Name of the preset the parameters started from (or the preset file path).
     pub preset: String,
-    pub params: BeeParams,
+    pub params: ParamValues,
     pub spawn: Region,
     pub variation: Variation,
-    pub bee: BeeBody,
+    /// The insect's body (`[swarm.bee]`).
+    pub bee: Body,
     /// Soft containment box (centre, half extents); `None` = unbounded.
     pub bounds: Option<(Vec3, Vec3)>,
 }
@@ -110,46 +92,10 @@ impl Region {
     }
 }
 
-/// Per-bee variation, as fractions: each bee draws a factor in [1 − v, 1 + v].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Variation {
-    pub size: f32,
-    pub speed: f32,
-    /// Spread of the oscillation phase as a fraction of a cycle (1 = fully random).
-    pub phase: f32,
-}
-
-/// The physical bee. Defaults are a honeybee worker.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BeeBody {
-    /// Body length, m.
-    pub length: f32,
-    /// Capsule radius r of Eq. 10–11, m.
-    pub radius: f32,
-    /// Mass, kg.
-    pub mass: f32,
-    /// Total wing area A of Eq. 2, m².
-    pub wing_area: f32,
-    /// Real wing beat frequency, Hz.
-    pub wing_beat_hz: f32,
-}
-
 #[derive(Clone, Debug, PartialEq)]
 pub struct Obstacle {
     pub name: String,
     pub shape: Shape,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TargetKind {
-    /// A hive entrance: attracts, and is sampled with virtual particles that push back.
-    Nest,
-    /// A flower: like a nest, smaller and weaker by default.
-    Flower,
-    /// A pure attractor, with no body.
-    Attractor,
-    /// A landing surface: pulls towards a plane rather than a point, with no body.
-    Surface,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -6,7 +6,7 @@ use super::locate::Locator;
 use super::schema::*;
 use super::*;
 use crate::error::ShotError;
-use crate::model::BeeParams;
+use crate::model::ParamValues;
 use glam::Quat;
 
 struct Ctx<'a> {
@@ -17,7 +17,21 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     /// An error about the value at `path`.
     fn err(&self, path: &str, message: impl Into<String>) -> ShotError {
-        let (line, column, source_line) = match self.loc.span_of(path) {
+        self.err_at(self.loc.span_of(path), path, message)
+    }
+
+    /// An error about the key at `path` (an unknown name).
+    fn key_err(&self, path: &str, message: impl Into<String>) -> ShotError {
+        self.err_at(self.loc.key_span_of(path), path, message)
+    }
+
+    fn err_at(
+        &self,
+        span: Option<std::ops::Range<usize>>,
+        path: &str,
+        message: impl Into<String>,
+    ) -> ShotError {
+        let (line, column, source_line) = match span {
             Some(span) => {
                 let (l, c, s) = self.loc.line_col(span.start);
                 (l, c, Some(s))
@@ -405,86 +419,44 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
     Ok(shot)
 }
 
+/// Applies `params = { … }` (at `prefix`) over `into`: each key must be a parameter of
+/// the model, each value within the parameter's range.
 fn resolve_params(
     cx: &Ctx,
     prefix: &str,
     p: &RawParams,
-    into: &mut BeeParams,
+    into: &mut ParamValues,
 ) -> Result<(), ShotError> {
-    macro_rules! set {
-        ($field:ident, $lo:expr, $hi:expr, $what:expr) => {
-            if let Some(v) = p.$field {
-                into.$field = cx.range(
-                    &format!("{prefix}.{}", stringify!($field)),
-                    v,
-                    $lo,
-                    $hi,
-                    $what,
-                )?;
-            }
+    let info = into.model().info();
+    for (key, &v) in p {
+        let path = format!("{prefix}.{key}");
+        let Some(spec) = info.params.iter().find(|s| s.name == key) else {
+            let names: Vec<&str> = info.params.iter().map(|s| s.name).collect();
+            let near = names
+                .iter()
+                .map(|n| (edit_distance(&key.to_ascii_lowercase(), n), *n))
+                .filter(|(d, n)| *d <= 2.max(n.len() / 3))
+                .min_by_key(|(d, _)| *d)
+                .map(|(_, n)| format!("did you mean `{n}`? "))
+                .unwrap_or_default();
+            let mut e = cx.key_err(
+                &path,
+                format!("the {} model has no parameter `{key}`", info.name),
+            );
+            e.hint = Some(format!(
+                "{near}its parameters: {} (`beeswarm models` lists them)",
+                names.join(", ")
+            ));
+            return Err(e);
         };
+        into.set(key, cx.range(&path, v, spec.min, spec.max, spec.expected)?);
     }
-    let weight = "a weight from 0 to 100";
-    set!(kappa1, 0.0, 100.0, weight);
-    set!(kappa2, 0.0, 100.0, weight);
-    set!(kappa3, 0.0, 100.0, weight);
-    set!(
-        noise_cell,
-        1e-3,
-        100.0,
-        "a noise cell size from 0.001 to 100 m"
-    );
-    set!(noise_gain, 0.0, 1000.0, "a noise gain from 0 to 1000");
-    set!(
-        neighbour_radius,
-        1e-3,
-        10.0,
-        "a neighbourhood radius from 0.001 to 10 m"
-    );
-    set!(speed, 0.01, 50.0, "a speed from 0.01 to 50 m/s");
-    set!(avoid_distance, 1e-3, 10.0, "a distance from 0.001 to 10 m");
-    set!(speed_wander, 0.0, 3.0, "a log-speed spread from 0 to 3");
-    set!(
-        speed_wander_time,
-        1e-2,
-        1000.0,
-        "a correlation time from 0.01 to 1000 s"
-    );
-    set!(
-        surface_speed,
-        0.0,
-        1.0,
-        "a fraction of the speed from 0 to 1"
-    );
-    set!(
-        surface_speed_distance,
-        1e-3,
-        10.0,
-        "a distance from 0.001 to 10 m"
-    );
-    set!(
-        heading_lag,
-        1e-3,
-        100.0,
-        "a time constant from 0.001 to 100 s"
-    );
-    set!(fov_deg, 1.0, 180.0, "a half-angle from 1 to 180 degrees");
-    set!(roll_max_deg, 0.0, 90.0, "an angle from 0 to 90 degrees");
-    set!(
-        oscillation_time_unit,
-        1e-4,
-        10.0,
-        "seconds per unit of t, from 0.0001 to 10"
-    );
-    set!(pressure_stiffness, 0.0, 1e6, "a stiffness from 0 to 1e6");
-    set!(collision_stiffness, 0.0, 1e7, "a stiffness from 0 to 1e7");
-    set!(attraction, 0.0, 100.0, "a factor from 0 to 100");
-    set!(containment, 0.0, 1000.0, "an acceleration from 0 to 1000");
     Ok(())
 }
 
-/// Reads a preset file (`[preset]` header and `[params]`) relative to `base`.
-pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
+/// Reads a preset file (`[preset]` header and `[params]`) for a swarm of `model`.
+pub fn load_preset_file(path: &Path, model: ModelKind) -> Result<ParamValues, ShotError> {
+    let builtin = || quoted(&preset_names(model));
     let src = std::fs::read_to_string(path).map_err(|e| ShotError {
         file: path.to_path_buf(),
         line: 0,
@@ -492,7 +464,11 @@ pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
         key: String::new(),
         message: format!("cannot read the preset file {}: {e}", path.display()),
         source_line: None,
-        hint: Some(format!("built-in presets: {}", quoted(&BeeParams::PRESETS))),
+        hint: Some(format!(
+            "built-in presets of the {} model: {}",
+            model.name(),
+            builtin()
+        )),
     })?;
     let cx = Ctx {
         file: path,
@@ -503,26 +479,43 @@ pub fn load_preset_file(path: &Path) -> Result<BeeParams, ShotError> {
             e.key = "preset".to_owned();
             e.message = "missing the [preset] table".to_owned();
             e.hint = Some(
-                "a preset file starts with [preset] (name, base, description, provenance), then [params]"
+                "a preset file starts with [preset] (name, model, base, description, provenance), then [params]"
                     .to_owned(),
             );
         }
         e
     })?;
-    let base = raw.preset.base.as_deref().unwrap_or(d::PRESET);
-    let mut params = BeeParams::preset(base).ok_or_else(|| {
+    let file_model = raw.preset.model.as_deref().unwrap_or("bee");
+    if file_model != model.name() {
+        return Err(cx.hint(
+            "preset.model",
+            format!(
+                "this preset is for the {file_model} model, the swarm flies the {} model",
+                model.name()
+            ),
+            "use a preset written for the swarm's model, or change the swarm's `model`",
+        ));
+    }
+    let base = raw
+        .preset
+        .base
+        .clone()
+        .unwrap_or_else(|| model.default_preset().to_owned());
+    let mut params = ParamValues::preset(model, &base).ok_or_else(|| {
         cx.err(
             "preset.base",
-            format!(
-                "expected one of {}, found \"{base}\"",
-                quoted(&BeeParams::PRESETS)
-            ),
+            format!("expected one of {}, found \"{base}\"", builtin()),
         )
     })?;
     if let Some(p) = &raw.params {
         resolve_params(&cx, "params", p, &mut params)?;
     }
     Ok(params)
+}
+
+/// The built-in preset names of a model.
+fn preset_names(model: ModelKind) -> Vec<&'static str> {
+    model.info().presets.iter().map(|p| p.name).collect()
 }
 
 fn resolve_swarm(
@@ -574,20 +567,18 @@ fn resolve_swarm(
             "remove the swarm instead of giving it no bees",
         ));
     }
-    let model = match cx.one_of(
-        &k("model"),
-        rs.model.as_deref().unwrap_or(d::MODEL),
-        &["bee", "brownian", "boids"],
-    )? {
-        "bee" => ModelKind::Bee,
-        "brownian" => ModelKind::Brownian,
-        _ => ModelKind::Boids,
-    };
-    let preset = rs.preset.clone().unwrap_or_else(|| d::PRESET.to_owned());
-    let mut params = match BeeParams::preset(&preset) {
+    let names: Vec<&str> = ModelKind::ALL.iter().map(|m| m.name()).collect();
+    let model_name = rs.model.as_deref().unwrap_or(d::MODEL);
+    let model = ModelKind::parse(cx.one_of(&k("model"), model_name, &names)?)
+        .expect("one of the registered names");
+    let preset = rs
+        .preset
+        .clone()
+        .unwrap_or_else(|| model.default_preset().to_owned());
+    let mut params = match ParamValues::preset(model, &preset) {
         Some(p) => p,
         None if preset.ends_with(".toml") => {
-            load_preset_file(&base.join(&preset)).map_err(|e| {
+            load_preset_file(&base.join(&preset), model).map_err(|e| {
                 if e.line == 0 {
                     // Unreadable: say so here, where the file is named.
                     let mut outer = cx.err(&k("preset"), e.message);
@@ -608,10 +599,11 @@ fn resolve_swarm(
             return Err(cx.hint(
                 &k("preset"),
                 format!(
-                    "expected one of {} or a preset file ending in .toml, found \"{preset}\"",
-                    quoted(&BeeParams::PRESETS)
+                    "the {} model has no preset \"{preset}\": expected one of {} or a preset file ending in .toml",
+                    model.name(),
+                    quoted(&preset_names(model))
                 ),
-                "beeswarm calibrate writes preset files",
+                "`beeswarm models` lists every model's presets; beeswarm calibrate writes preset files",
             ));
         }
     };
@@ -688,7 +680,7 @@ fn resolve_swarm(
     };
 
     let rb = rs.bee.clone().unwrap_or_default();
-    let bee = BeeBody {
+    let bee = Body {
         length: cx.range(
             &k("bee.length"),
             rb.length.unwrap_or(d::BEE_LENGTH),

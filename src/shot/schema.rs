@@ -31,31 +31,9 @@ pub struct RawScene {
     pub seed: Option<i64>,
 }
 
-/// Model parameters; every one may be set in a preset file or overridden per swarm.
-#[derive(Deserialize, Debug, Default, Clone, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawParams {
-    pub kappa1: Option<f64>,
-    pub kappa2: Option<f64>,
-    pub kappa3: Option<f64>,
-    pub noise_cell: Option<f64>,
-    pub noise_gain: Option<f64>,
-    pub neighbour_radius: Option<f64>,
-    pub speed: Option<f64>,
-    pub avoid_distance: Option<f64>,
-    pub heading_lag: Option<f64>,
-    pub speed_wander: Option<f64>,
-    pub speed_wander_time: Option<f64>,
-    pub surface_speed: Option<f64>,
-    pub surface_speed_distance: Option<f64>,
-    pub fov_deg: Option<f64>,
-    pub roll_max_deg: Option<f64>,
-    pub oscillation_time_unit: Option<f64>,
-    pub pressure_stiffness: Option<f64>,
-    pub collision_stiffness: Option<f64>,
-    pub attraction: Option<f64>,
-    pub containment: Option<f64>,
-}
+/// Model parameter values by name (`params = { speed = 1.2 }`); which names are valid
+/// depends on the swarm's model, checked when the shot is resolved.
+pub type RawParams = std::collections::BTreeMap<String, f64>;
 
 #[derive(Deserialize, Debug, Default, Clone)]
 #[serde(deny_unknown_fields)]
@@ -175,6 +153,8 @@ pub struct RawPresetFile {
 #[serde(deny_unknown_fields)]
 pub struct RawPresetHeader {
     pub name: Option<String>,
+    /// The model the preset is for (`bee` when absent).
+    pub model: Option<String>,
     pub base: Option<String>,
     pub description: Option<String>,
     /// Free-form provenance: the command that produced the preset, fitness, date.

@@ -1,6 +1,6 @@
 //! The simulation: world state, stepping, neighbour grid, and what is recorded.
 pub mod frame;
-pub mod grid;
+
 pub mod world;
 
 pub use frame::{CacheMeta, Frame, SwarmFrame, SwarmMeta};

@@ -1,0 +1,347 @@
+//! Paper 000's bio-inspired bee model (Chen et al., "A Bio-inspired Model for Bee
+//! Simulations"), one file per force: body oscillation (Eq. 2–4), SPH repulsion
+//! (Eq. 10–11) with its kernels, and the parameters with Table I. Vision (Eq. 5–7) and
+//! contact springs are shared with other models (`model::vision`, `model::collision`).
+//!
+//! Eq. 1: a = κ1 F_o + γ (κ2 F_curl + F_target) + κ3 F_repul − drag, with the terms the
+//! paper leaves implicit described in docs/model.md.
+
+pub mod kernels;
+pub mod oscillation;
+pub mod params;
+pub mod repulsion;
+
+pub use params::BeeParams;
+
+use super::context::{Context, Neighbour, TargetNow};
+use super::flight::{self, Avoidance, Cruiser, Flight, lag_blend};
+use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup, vision};
+use crate::field::CurlNoise;
+use crate::math::{self, Rng, normalize_or};
+use crate::species::{BEE_CHANNELS, HONEYBEE};
+use glam::{Quat, Vec3};
+use kernels::Kernels;
+
+/// Time constants of the body's attitude, seconds: how fast the roll reaches its target,
+/// and the smoothing of the mean path for sway. (How fast the heading follows the velocity
+/// is the `heading_lag` parameter.)
+const ROLL_LAG_S: f32 = 0.04;
+const SWAY_PATH_S: f32 = 0.3;
+
+/// One bee's state.
+#[derive(Clone, Copy, Debug)]
+pub struct Bee {
+    pub c: Cruiser,
+    /// Ornstein–Uhlenbeck state (stationary N(0, 1)) of the preferred speed's wandering.
+    wander: f32,
+    /// Exponentially smoothed path; sway is the lateral offset from it.
+    mean_pos: Vec3,
+    pitch_deg: f32,
+    roll_deg: f32,
+    /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
+    /// velocity is the rotation between the two attitudes over that substep.
+    prev_attitude: (f32, f32, f32),
+    /// Oscillation phases in the maneuvering functions' own time units.
+    phase_pitch: f32,
+    phase_roll: f32,
+}
+
+impl Agent for Bee {
+    fn position(&self) -> Vec3 {
+        self.c.pos
+    }
+    fn velocity(&self) -> Vec3 {
+        self.c.vel
+    }
+    fn size(&self) -> f32 {
+        self.c.size
+    }
+    fn place(&mut self, position: Vec3, velocity: Vec3) {
+        self.c.place(position, velocity);
+        self.mean_pos = position;
+        self.prev_attitude = (self.c.yaw, self.pitch_deg, self.roll_deg);
+    }
+}
+
+/// Per-swarm constants, precomputed in f32.
+pub struct BeeModel {
+    flight: Flight,
+    k1: f32,
+    k2: f32,
+    k3: f32,
+    h: f32,
+    kernels: Kernels,
+    rest_density: f32,
+    fov: f32,
+    roll_max: f32,
+    roll_blend: f32,
+    sway_blend: f32,
+    /// Preferred-speed wandering: σ (log units), and the per-substep decay and kick of
+    /// its Ornstein–Uhlenbeck state.
+    wander_sigma: f32,
+    wander_decay: f32,
+    wander_kick: f32,
+    surface_speed: f32,
+    surface_speed_distance: f32,
+    time_unit: f64,
+    stiffness: f32,
+    mass: f32,
+    wing_area: f32,
+    mean_cl: f32,
+    phase_spread: f32,
+    speed: f32,
+    curl: CurlNoise,
+}
+
+impl Model for BeeModel {
+    type Agent = Bee;
+    const INFO: ModelInfo = ModelInfo {
+        name: "bee",
+        summary: "Paper 000, Chen et al.: body oscillation, visual obstacle avoidance with \
+                  roll, curl-noise flight and SPH repulsion (Eq. 1)",
+        params: BeeParams::SPECS,
+        presets: params::PRESETS,
+        channels: &BEE_CHANNELS,
+        species: &HONEYBEE,
+    };
+    const GATHERS: bool = true;
+
+    fn new(s: &SwarmSetup) -> Self {
+        let p = BeeParams::from_values(s.params);
+        let dt = s.dt;
+        let kernels = Kernels::new(p.neighbour_radius as f32);
+        BeeModel {
+            flight: Flight::new(
+                s,
+                p.avoid_distance,
+                p.heading_lag,
+                p.collision_stiffness,
+                p.attraction,
+                p.containment,
+            ),
+            k1: p.kappa1 as f32,
+            k2: p.kappa2 as f32,
+            k3: p.kappa3 as f32,
+            h: p.neighbour_radius as f32,
+            rest_density: s.body.mass * kernels.poly6(0.0),
+            kernels,
+            fov: p.fov_deg as f32,
+            roll_max: p.roll_max_deg as f32,
+            roll_blend: lag_blend(dt as f32, ROLL_LAG_S),
+            sway_blend: lag_blend(dt as f32, SWAY_PATH_S),
+            wander_sigma: p.speed_wander as f32,
+            wander_decay: (-dt / p.speed_wander_time).exp() as f32,
+            wander_kick: (1.0 - (-2.0 * dt / p.speed_wander_time).exp()).sqrt() as f32,
+            surface_speed: p.surface_speed as f32,
+            surface_speed_distance: p.surface_speed_distance as f32,
+            time_unit: p.oscillation_time_unit,
+            stiffness: p.pressure_stiffness as f32,
+            mass: s.body.mass,
+            wing_area: s.body.wing_area,
+            mean_cl: oscillation::mean_lift_coefficient(),
+            phase_spread: s.variation.phase,
+            speed: p.speed as f32,
+            curl: CurlNoise::new(
+                math::mix64(s.seed ^ ((s.index as u64 + 1) * 0x51ED)),
+                p.noise_cell,
+                p.noise_gain,
+            ),
+        }
+    }
+
+    fn reach(&self) -> f32 {
+        self.h
+    }
+
+    fn target_particle_spacing(&self) -> Option<f32> {
+        Some(self.h * 0.4)
+    }
+
+    fn spawn(&self, start: &Start, rng: &mut Rng) -> Bee {
+        let c = Cruiser::new(start, self.speed);
+        let phase_pitch = self.phase_spread * rng.f32() * oscillation::PITCH_PERIOD as f32;
+        let phase_roll = self.phase_spread * rng.f32() * oscillation::ROLL_PERIOD as f32;
+        let pitch_deg = oscillation::pitch_deg(phase_pitch as f64);
+        let roll_deg = oscillation::roll_deg(phase_roll as f64);
+        Bee {
+            c,
+            wander: rng.gaussian(),
+            mean_pos: c.pos,
+            pitch_deg,
+            roll_deg,
+            prev_attitude: (c.yaw, pitch_deg, roll_deg),
+            phase_pitch,
+            phase_roll,
+        }
+    }
+
+    #[inline]
+    fn gather_term(&self, ri: f32, o: &Neighbour, d2: f32) -> f32 {
+        repulsion::density_term(&self.kernels, o.mass, d2.sqrt(), ri + o.radius)
+    }
+
+    fn gather_finish(&self, targets: &[TargetNow], pos: Vec3, ri: f32, sum: f32) -> (f32, f32) {
+        let mut rho = sum;
+        for &ti in &self.flight.targets {
+            let t = &targets[ti];
+            if pos.distance(t.center) > t.radius + self.h + ri {
+                continue;
+            }
+            for off in &t.particles {
+                rho += repulsion::density_term(
+                    &self.kernels,
+                    self.mass,
+                    pos.distance(t.center + *off),
+                    ri,
+                );
+            }
+        }
+        (
+            rho,
+            repulsion::pressure(self.stiffness, rho, self.rest_density),
+        )
+    }
+
+    fn step(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
+        let c = &b.c;
+        let ri = self.flight.body_radius(c.size);
+        let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
+        let mut out = *b;
+
+        // Neighbours: pressure repulsion (Eq. 11) and contact springs (Sec. VII).
+        let mut a_rep = Vec3::ZERO;
+        let mut a_col = Vec3::ZERO;
+        cx.for_each_neighbour(i, self.h + ri + cx.max_body_radius, |j, pj, d2| {
+            let o = &cx.agents[j];
+            let rho_j = if o.density > 0.0 { o.density } else { density };
+            a_rep += repulsion::pressure_term(
+                &self.kernels,
+                c.pos - pj,
+                d2.sqrt(),
+                ri + o.radius,
+                o.mass,
+                pressure,
+                o.pressure,
+                density,
+                rho_j,
+                || flight::separation_fallback(i, j),
+            );
+            a_col += self.flight.contact(i, c, ri, j, o, d2);
+        });
+
+        // Targets: attraction, and the push of their virtual particles.
+        let a_attr = self.flight.pull(cx, c.pos);
+        for &ti in &self.flight.targets {
+            let t = &cx.targets[ti];
+            if c.pos.distance(t.center) > t.radius + self.h + ri {
+                continue;
+            }
+            for off in &t.particles {
+                let r = c.pos - (t.center + *off);
+                // A static particle mirrors the bee's pressure at rest density.
+                a_rep += repulsion::pressure_term(
+                    &self.kernels,
+                    r,
+                    r.length(),
+                    ri,
+                    self.mass,
+                    pressure,
+                    pressure,
+                    density,
+                    self.rest_density,
+                    || normalize_or(*off, Vec3::Y),
+                );
+            }
+        }
+
+        // Body oscillation (Eq. 3–4) and vision (Sec. IV-B).
+        let air = c.vel - cx.wind;
+        let heading = Quat::from_rotation_y(c.yaw);
+        let tt = cx.t / self.time_unit;
+        out.pitch_deg = oscillation::pitch_deg(tt + b.phase_pitch as f64);
+        let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
+        let forward = heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
+        let d0 = self.flight.d0;
+        let mut gamma = 1.0f32;
+        let mut nearest = f32::INFINITY;
+        let mut nearest_any = f32::INFINITY;
+        // While avoiding an obstacle it sees: the horizontal way out, away from every
+        // obstacle within d0 (seen or not, so that a corner's way out is its diagonal).
+        let mut steer = Avoidance::default();
+        for q in cx.obstacle_queries(c.pos) {
+            let d = q.distance - ri;
+            nearest_any = nearest_any.min(d);
+            let r_e = q.point - c.pos;
+            if d < d0 {
+                let n = normalize_or(Vec3::new(-r_e.x, 0.0, -r_e.z), Vec3::ZERO);
+                steer.away += n * (1.0 - d.max(0.0) / d0);
+            }
+            // The nearest obstacle seen within d0 takes over the roll.
+            if d < d0 && d < nearest && vision::in_view(forward, r_e, self.fov) {
+                nearest = d;
+                roll_target =
+                    vision::avoid_roll_deg(vision::side(forward, r_e), d, d0, self.roll_max);
+                gamma = vision::ramp((d / d0).max(0.0)).abs();
+                steer.avoiding = true;
+            }
+        }
+        out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * self.roll_blend;
+        let f_o = oscillation::accel(
+            out.pitch_deg,
+            out.roll_deg,
+            air.length(),
+            self.mass,
+            self.wing_area,
+            self.mean_cl,
+        );
+        let a_o = heading * f_o;
+        // Linear drag sized so that mean thrust balances at the preferred speed, which
+        // slows near surfaces (optic flow) and wanders slowly (log-normal, mean preserved)
+        // when speed_wander > 0.
+        let mut pref = c.speed
+            * vision::surface_speed_factor(
+                nearest_any,
+                self.surface_speed,
+                self.surface_speed_distance,
+            );
+        if self.wander_sigma > 0.0 {
+            let mut rng = cx.rng(0x5BEED, i);
+            out.wander = b.wander * self.wander_decay + self.wander_kick * rng.gaussian();
+            let sg = self.wander_sigma;
+            pref *= (sg * out.wander - 0.5 * sg * sg).exp();
+        }
+        let drag = self.k1 * oscillation::mean_thrust_accel() / pref.max(1e-3);
+        // Eq. 1, plus the terms the paper leaves implicit (docs/model.md). While avoiding,
+        // the other rules are faded out by the ramp γ.
+        let a =
+            self.k1 * a_o + gamma * (self.k2 * self.curl.force(c.pos) + a_attr) + self.k3 * a_rep
+                - air * drag;
+
+        out.c = self.flight.advance(cx, c, a, a_col, steer);
+        out.mean_pos = b.mean_pos + (out.c.pos - b.mean_pos) * self.sway_blend;
+        out.prev_attitude = (c.yaw, b.pitch_deg, b.roll_deg);
+        out
+    }
+
+    fn pose(&self, b: &Bee, dt: f32) -> Pose {
+        let orientation = attitude(b.c.yaw, b.pitch_deg, b.roll_deg);
+        let (y, p, r) = b.prev_attitude;
+        Pose {
+            orientation,
+            heading: Quat::from_rotation_y(b.c.yaw),
+            angular_velocity_deg: math::angular_velocity(attitude(y, p, r), orientation, dt)
+                * (180.0 / std::f32::consts::PI),
+        }
+    }
+
+    fn record(&self, b: &Bee, pose: &Pose, channels: &mut [f32]) {
+        channels[0] = b.pitch_deg;
+        channels[1] = b.roll_deg;
+        channels[2] = (b.c.pos - b.mean_pos).dot(pose.heading * Vec3::Z);
+    }
+}
+
+/// Body orientation from heading (radians) and pitch and roll (degrees).
+pub fn attitude(yaw: f32, pitch_deg: f32, roll_deg: f32) -> Quat {
+    math::body_orientation(yaw, pitch_deg.to_radians(), roll_deg.to_radians())
+}

@@ -1,0 +1,311 @@
+//! Force-based flight shared by the models that integrate accelerations (the bee model and
+//! the Brownian and boids baselines): targets' pull and soft bounds, contact springs,
+//! semi-implicit Euler with paper 000's obstacle velocity tuning (Eq. 5) and a keep-out
+//! guard, and the body's heading following the direction of travel.
+
+use super::context::{Context, Neighbour};
+use super::targets::{self, TargetKind};
+use super::{Start, SwarmSetup, collision, vision};
+use crate::math::{self, Rng, finite_or_zero};
+use glam::Vec3;
+
+/// Largest yaw rate, rad/s, of an agent that has (nearly) stopped in front of an obstacle
+/// it sees and turns on the spot to face away from it.
+const HOVER_TURN_RATE: f32 = std::f32::consts::PI;
+/// Horizontal speed, m/s, below which an agent avoiding an obstacle turns on the spot: the
+/// roll of Eq. 6 steers only a moving bee, and a bee whose thrust points into a corner stops.
+const HOVER_TURN_SPEED: f32 = 0.05;
+
+/// An angle difference wrapped into [−π, π), radians.
+fn wrap_angle(a: f32) -> f32 {
+    (a + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI
+}
+
+/// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
+pub fn lag_blend(dt: f32, tau: f32) -> f32 {
+    1.0 - (-dt / tau).exp()
+}
+
+/// The state every force-based flyer has.
+#[derive(Clone, Copy, Debug)]
+pub struct Cruiser {
+    pub pos: Vec3,
+    pub vel: Vec3,
+    /// Heading about +Y, radians.
+    pub yaw: f32,
+    /// Body scale (per-agent variation).
+    pub size: f32,
+    /// Preferred speed (per-agent variation), m/s.
+    pub speed: f32,
+}
+
+impl Cruiser {
+    /// A new flyer at `start`, cruising at the model's preferred `speed` (m/s) times the
+    /// agent's variation.
+    pub fn new(start: &Start, speed: f32) -> Self {
+        let speed = speed * start.speed_factor;
+        Cruiser {
+            pos: start.pos,
+            vel: start.dir * speed,
+            yaw: math::yaw_of(start.dir),
+            size: start.size,
+            speed,
+        }
+    }
+
+    /// Moves the agent; the heading follows the new direction of travel at once.
+    pub fn place(&mut self, position: Vec3, velocity: Vec3) {
+        self.pos = position;
+        self.vel = velocity;
+        let horizontal = Vec3::new(velocity.x, 0.0, velocity.z);
+        if horizontal.length() > 0.02 {
+            self.yaw = math::yaw_of(horizontal);
+        }
+    }
+}
+
+/// How a model steers away from obstacles this step (the bee model's vision).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Avoidance {
+    /// An obstacle is seen within d0.
+    pub avoiding: bool,
+    /// The horizontal way out, away from every obstacle within d0.
+    pub away: Vec3,
+}
+
+/// Per-swarm constants of force-based flight.
+#[derive(Clone, Debug)]
+pub struct Flight {
+    /// d0 of Eq. 5: distance at which velocity towards an obstacle is tuned down, m.
+    pub d0: f32,
+    /// Per-substep blend of the heading towards the direction of travel.
+    pub yaw_blend: f32,
+    /// Contact spring stiffness, 1/s².
+    pub spring: f32,
+    /// Scale of the targets' pull.
+    pub attraction: f32,
+    /// Pull back into the bounds, 1/s².
+    pub containment: f32,
+    /// Body radius of an agent of size 1, m.
+    pub radius: f32,
+    pub bounds: Option<(Vec3, Vec3)>,
+    pub targets: Vec<usize>,
+}
+
+impl Flight {
+    /// From the setup and the model's parameter values of the same names.
+    pub fn new(
+        setup: &SwarmSetup,
+        d0: f64,
+        heading_lag: f64,
+        spring: f64,
+        attraction: f64,
+        containment: f64,
+    ) -> Self {
+        Flight {
+            d0: d0 as f32,
+            yaw_blend: lag_blend(setup.dt as f32, heading_lag as f32),
+            spring: spring as f32,
+            attraction: attraction as f32,
+            containment: containment as f32,
+            radius: setup.body.radius,
+            bounds: setup.bounds,
+            targets: setup.targets.clone(),
+        }
+    }
+
+    /// Body radius of an agent of scale `size`, m.
+    #[inline]
+    pub fn body_radius(&self, size: f32) -> f32 {
+        self.radius * size
+    }
+
+    /// Contact spring (paper 000 Sec. VII) on agent i at `c` from neighbour j.
+    #[inline]
+    pub fn contact(
+        &self,
+        i: usize,
+        c: &Cruiser,
+        ri: f32,
+        j: usize,
+        o: &Neighbour,
+        d2: f32,
+    ) -> Vec3 {
+        let r = c.pos - o.pos;
+        let dist = d2.sqrt();
+        collision::spring_accel(r, dist, ri + o.radius, c.vel - o.vel, self.spring, || {
+            separation_fallback(i, j)
+        })
+    }
+
+    /// The targets' pull on an agent at `pos`, plus the pull back into the bounds.
+    #[inline]
+    pub fn pull(&self, cx: &Context, pos: Vec3) -> Vec3 {
+        pull(
+            cx,
+            &self.targets,
+            self.attraction,
+            self.bounds,
+            self.containment,
+            pos,
+        )
+    }
+
+    /// One substep: semi-implicit Euler with acceleration `a + a_col`, then obstacle
+    /// velocity tuning (Eq. 5), a speed limit and a hard guard, then the heading.
+    #[inline]
+    pub fn advance(
+        &self,
+        cx: &Context,
+        b: &Cruiser,
+        a: Vec3,
+        a_col: Vec3,
+        steer: Avoidance,
+    ) -> Cruiser {
+        let dt = cx.dt;
+        let ri = self.body_radius(b.size);
+        let a = finite_or_zero(a + a_col);
+        let mut vel = b.vel + a * dt;
+        for q in cx.obstacle_queries(b.pos) {
+            vel = vision::tune_velocity(vel, q.normal, q.distance - ri, self.d0);
+        }
+        let max_speed = 4.0 * b.speed + 2.0;
+        if vel.length() > max_speed {
+            vel = vel.normalize() * max_speed;
+        }
+        let (pos, vel) = keep_out(cx, b.pos, b.pos + vel * dt, vel, ri);
+        Cruiser {
+            pos,
+            vel,
+            yaw: self.heading(b.yaw, vel, steer, dt),
+            ..*b
+        }
+    }
+
+    /// The heading after a substep at velocity `vel` (see [`follow_heading`]).
+    #[inline]
+    pub fn heading(&self, yaw: f32, vel: Vec3, steer: Avoidance, dt: f32) -> f32 {
+        follow_heading(yaw, vel, steer, self.yaw_blend, dt)
+    }
+}
+
+/// The heading (radians about +Y) after a substep at velocity `vel`: it follows the
+/// direction of travel with per-substep blend `blend`; stopped facing an obstacle (in a
+/// corner, say), it turns on the spot towards open air, or the heading, and with it the
+/// thrust, would stay pointed at the wall.
+#[inline]
+pub fn follow_heading(yaw: f32, vel: Vec3, steer: Avoidance, blend: f32, dt: f32) -> f32 {
+    let horizontal = Vec3::new(vel.x, 0.0, vel.z);
+    let stopped = steer.avoiding && horizontal.length() < HOVER_TURN_SPEED;
+    if stopped && steer.away.length_squared() > 1e-8 {
+        let dy = wrap_angle(math::yaw_of(steer.away) - yaw);
+        let turn = dy.clamp(-HOVER_TURN_RATE * dt, HOVER_TURN_RATE * dt);
+        (yaw + turn).rem_euclid(std::f32::consts::TAU)
+    } else if horizontal.length() > 0.02 {
+        let dy = wrap_angle(math::yaw_of(horizontal) - yaw);
+        (yaw + dy * blend).rem_euclid(std::f32::consts::TAU)
+    } else {
+        yaw
+    }
+}
+
+/// The pull of targets `targets` (scaled by `attraction`) on an agent at `pos`, plus the
+/// pull back into `bounds` (centre, half extents) with gain `containment`, m/s².
+#[inline]
+pub fn pull(
+    cx: &Context,
+    targets: &[usize],
+    attraction: f32,
+    bounds: Option<(Vec3, Vec3)>,
+    containment: f32,
+    pos: Vec3,
+) -> Vec3 {
+    let mut a = Vec3::ZERO;
+    for &ti in targets {
+        let t = &cx.targets[ti];
+        let strength = t.strength * attraction;
+        a += match t.kind {
+            TargetKind::Surface => {
+                targets::surface_attraction(pos, t.center, t.normal, strength, t.reach)
+            }
+            _ => targets::attraction(pos, t.center, strength, t.reach),
+        };
+    }
+    if let Some((c, h)) = bounds {
+        a += targets::containment(pos, c, h, containment);
+    }
+    a
+}
+
+/// Never lets a body of radius `ri` into an obstacle: a move from `from` to `pos` that
+/// ends closer than `ri` to a surface is put back on it, with the velocity into it removed;
+/// a non-finite result keeps the agent where it was, at rest.
+#[inline]
+pub fn keep_out(cx: &Context, from: Vec3, mut pos: Vec3, mut vel: Vec3, ri: f32) -> (Vec3, Vec3) {
+    for q in cx.obstacle_queries(pos) {
+        if q.distance < ri {
+            // Numerically the ramp can leave a sliver of approach; never let a body in.
+            pos = q.point + q.normal * ri;
+            let vn = vel.dot(q.normal);
+            if vn < 0.0 {
+                vel -= q.normal * vn;
+            }
+        }
+    }
+    if !pos.is_finite() || !vel.is_finite() {
+        return (from, Vec3::ZERO);
+    }
+    (pos, vel)
+}
+
+/// A deterministic direction separating coincident agents i and j (opposite for j and i).
+pub fn separation_fallback(i: usize, j: usize) -> Vec3 {
+    let (a, b, sign) = if i < j { (i, j, 1.0) } else { (j, i, -1.0) };
+    Rng::new(a as u64, b as u64, 0x5EA).unit_vector() * sign
+}
+
+/// The agent state of a model that is a flyer and nothing more (the baselines): level
+/// flight, the body along its heading.
+#[derive(Clone, Copy, Debug)]
+pub struct Flyer {
+    pub c: Cruiser,
+    /// Heading one substep earlier, radians (for the recorded angular velocity).
+    pub prev_yaw: f32,
+}
+
+impl Flyer {
+    pub fn new(start: &Start, speed: f32) -> Self {
+        let c = Cruiser::new(start, speed);
+        Flyer { c, prev_yaw: c.yaw }
+    }
+
+    /// The attitude of level flight along the heading.
+    pub fn pose(&self, dt: f32) -> super::Pose {
+        let orientation = math::body_orientation(self.c.yaw, 0.0, 0.0);
+        super::Pose {
+            orientation,
+            heading: glam::Quat::from_rotation_y(self.c.yaw),
+            angular_velocity_deg: math::angular_velocity(
+                math::body_orientation(self.prev_yaw, 0.0, 0.0),
+                orientation,
+                dt,
+            ) * (180.0 / std::f32::consts::PI),
+        }
+    }
+}
+
+impl super::Agent for Flyer {
+    fn position(&self) -> Vec3 {
+        self.c.pos
+    }
+    fn velocity(&self) -> Vec3 {
+        self.c.vel
+    }
+    fn size(&self) -> f32 {
+        self.c.size
+    }
+    fn place(&mut self, position: Vec3, velocity: Vec3) {
+        self.c.place(position, velocity);
+        self.prev_yaw = self.c.yaw;
+    }
+}
