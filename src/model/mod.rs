@@ -16,6 +16,7 @@ pub mod boids;
 pub mod brownian;
 pub mod collision;
 pub mod context;
+pub mod curl;
 pub mod flight;
 pub mod params;
 pub mod targets;
@@ -64,6 +65,7 @@ macro_rules! registry {
 
 registry! {$
     Bee => crate::model::bee::BeeModel,
+    Curl => crate::model::curl::CurlModel,
     Brownian => crate::model::brownian::BrownianModel,
     Boids => crate::model::boids::BoidsModel,
 }
