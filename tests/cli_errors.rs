@@ -824,3 +824,80 @@ fn eval_names_an_empty_path_in_a_pooled_list() {
         run.stderr
     );
 }
+
+#[test]
+fn parameters_and_presets_are_checked_against_the_swarms_model() {
+    // A bee parameter on a boids swarm: located at the key, naming the boids' parameters.
+    let err =
+        refuse("[[swarm]]\ncount = 3\nmodel = \"boids\"\nparams = { speed = 1, kappa1 = 2 }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:4:23:",
+            "key `swarm[0].params.kappa1`",
+            "the boids model has no parameter `kappa1`",
+            "its parameters: speed, avoid_distance",
+            "neighbour_radius",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nmodel = \"curl\"\nparams = { sped = 2 }\n");
+    assert_says(
+        &err,
+        &[
+            "the curl model has no parameter `sped`",
+            "did you mean `speed`?",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nmodel = \"curl\"\npreset = \"nest\"\n");
+    assert_says(
+        &err,
+        &[
+            "key `swarm[0].preset`",
+            "the curl model has no preset \"nest\"",
+            "\"default\"",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nmodel = \"wasp\"\n");
+    assert_says(
+        &err,
+        &[
+            "key `swarm[0].model`",
+            "expected one of \"bee\", \"curl\", \"brownian\", \"boids\"",
+        ],
+    );
+    // A preset file written for another model.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\nmodel = \"boids\"\npreset = \"fit.toml\"\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("fit.toml"),
+        "[preset]\nname = \"fit\"\nmodel = \"bee\"\n[params]\nspeed = 2\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &[
+            "the preset file \"fit.toml\" has an error",
+            "this preset is for the bee model, the swarm flies the boids model",
+        ],
+    );
+    // The same file for the right model loads, and sets the value.
+    std::fs::write(
+        p.join("fit.toml"),
+        "[preset]\nname = \"fit\"\nmodel = \"boids\"\n[params]\nspeed = 2\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stdout.contains("model boids, preset fit.toml") && run.stdout.contains("speed 2 m/s"),
+        "{}",
+        run.stdout
+    );
+}

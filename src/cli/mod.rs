@@ -1,16 +1,17 @@
-//! The command line: `bake`, `check`, `bench`, `eval`, `calibrate`. `main.rs` only calls
+//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`. `main.rs` only calls
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
 mod bench;
 mod check;
+pub mod models;
 
 use crate::error::Error;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser, Debug)]
 #[command(name = "beeswarm", version, about = "Simulate honeybee swarms and bake them into glTF, USD and CSV caches.", long_about = None,
-    after_help = "Examples:\n  beeswarm bake                      bake the built-in demo shot into ./out/\n  beeswarm bake shot.toml --format usda,csv\n  beeswarm check shot.toml\n  beeswarm bench --bees 10000 --frames 48")]
+    after_help = "Examples:\n  beeswarm bake                      bake the built-in demo shot into ./out/\n  beeswarm bake shot.toml --format usda,csv\n  beeswarm check shot.toml\n  beeswarm models\n  beeswarm bench --bees 10000 --frames 48")]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -21,6 +22,7 @@ pub enum Command {
     Bake(bake::BakeArgs),
     Check(check::CheckArgs),
     Bench(bench::BenchArgs),
+    Models(models::ModelsArgs),
     Eval(crate::eval::EvalArgs),
     Calibrate(crate::eval::CalibrateArgs),
 }
@@ -39,6 +41,7 @@ pub fn main() -> i32 {
         Command::Bake(a) => bake::run(a),
         Command::Check(a) => check::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Models(a) => models::run(a),
         Command::Eval(a) => crate::eval::run_eval(&a),
         Command::Calibrate(a) => crate::eval::run_calibrate(&a),
     };
