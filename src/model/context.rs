@@ -113,7 +113,7 @@ impl Context<'_> {
     /// whatever the number of threads): `f(j, position, squared distance)`. `reach` must
     /// not exceed the one the gather pass listed neighbours with (the model's reach plus
     /// both body radii); further agents are not listed.
-    #[inline]
+    #[inline(always)]
     pub fn for_each_neighbour(&self, i: usize, reach: f32, mut f: impl FnMut(usize, Vec3, f32)) {
         let p = self.agents[i].pos;
         let n = &self.lists[i];

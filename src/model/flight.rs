@@ -3,7 +3,7 @@
 //! semi-implicit Euler with paper 000's obstacle velocity tuning (Eq. 5) and a keep-out
 //! guard, and the body's heading following the direction of travel.
 
-use super::context::{Context, Neighbour};
+use super::context::Context;
 use super::targets::{self, TargetKind};
 use super::{Start, SwarmSetup, collision, vision};
 use crate::math::{self, Rng, finite_or_zero};
@@ -120,22 +120,19 @@ impl Flight {
         self.radius * size
     }
 
-    /// Contact spring (paper 000 Sec. VII) on agent i at `c` from neighbour j.
-    #[inline]
+    /// Contact spring (paper 000 Sec. VII) between bodies `contact` metres apart at rest,
+    /// at offset `r` = agent − neighbour and distance `dist`, with relative velocity
+    /// `rel_vel`; `fallback` separates coincident bodies ([`separation_fallback`]).
+    #[inline(always)]
     pub fn contact(
         &self,
-        i: usize,
-        c: &Cruiser,
-        ri: f32,
-        j: usize,
-        o: &Neighbour,
-        d2: f32,
+        fallback: impl FnOnce() -> Vec3,
+        contact: f32,
+        r: Vec3,
+        dist: f32,
+        rel_vel: Vec3,
     ) -> Vec3 {
-        let r = c.pos - o.pos;
-        let dist = d2.sqrt();
-        collision::spring_accel(r, dist, ri + o.radius, c.vel - o.vel, self.spring, || {
-            separation_fallback(i, j)
-        })
+        collision::spring_accel(r, dist, contact, rel_vel, self.spring, fallback)
     }
 
     /// The targets' pull on an agent at `pos`, plus the pull back into the bounds.
@@ -153,7 +150,7 @@ impl Flight {
 
     /// One substep: semi-implicit Euler with acceleration `a + a_col`, then obstacle
     /// velocity tuning (Eq. 5), a speed limit and a hard guard, then the heading.
-    #[inline]
+    #[inline(always)]
     pub fn advance(
         &self,
         cx: &Context,
@@ -240,7 +237,7 @@ pub fn pull(
 /// Never lets a body of radius `ri` into an obstacle: a move from `from` to `pos` that
 /// ends closer than `ri` to a surface is put back on it, with the velocity into it removed;
 /// a non-finite result keeps the agent where it was, at rest.
-#[inline]
+#[inline(always)]
 pub fn keep_out(cx: &Context, from: Vec3, mut pos: Vec3, mut vel: Vec3, ri: f32) -> (Vec3, Vec3) {
     for q in cx.obstacle_queries(pos) {
         if q.distance < ri {

@@ -211,22 +211,18 @@ impl Model for BeeModel {
         // Neighbours: pressure repulsion (Eq. 11) and contact springs (Sec. VII).
         let mut a_rep = Vec3::ZERO;
         let mut a_col = Vec3::ZERO;
+        // Locals, so that the neighbour loop reads registers rather than chasing `self`.
+        let (pos, vel, agents, kernels) = (c.pos, c.vel, cx.agents, &self.kernels);
         cx.for_each_neighbour(i, self.h + ri + cx.max_body_radius, |j, pj, d2| {
-            let o = &cx.agents[j];
+            let o = &agents[j];
+            let (r, dist) = (pos - pj, d2.sqrt());
+            let contact = ri + o.radius;
+            let fallback = || flight::separation_fallback(i, j);
             let rho_j = if o.density > 0.0 { o.density } else { density };
             a_rep += repulsion::pressure_term(
-                &self.kernels,
-                c.pos - pj,
-                d2.sqrt(),
-                ri + o.radius,
-                o.mass,
-                pressure,
-                o.pressure,
-                density,
-                rho_j,
-                || flight::separation_fallback(i, j),
+                kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j, fallback,
             );
-            a_col += self.flight.contact(i, c, ri, j, o, d2);
+            a_col += self.flight.contact(fallback, contact, r, dist, vel - o.vel);
         });
 
         // Targets: attraction, and the push of their virtual particles.

@@ -120,7 +120,13 @@ impl Model for BoidsModel {
                     flight::separation_fallback(i, j) * 1e3
                 };
             }
-            a_col += self.flight.contact(i, &b.c, ri, j, o, d2);
+            a_col += self.flight.contact(
+                || flight::separation_fallback(i, j),
+                ri + o.radius,
+                r,
+                dist,
+                b.c.vel - o.vel,
+            );
         });
         let a = accel(b.c.pos, b.c.vel, &hood, b.c.speed) + self.flight.pull(cx, b.c.pos);
         Flyer {

@@ -2,7 +2,7 @@
 //! velocity process), as the biology literature and paper 000 Sec. VIII compare against.
 
 use super::context::Context;
-use super::flight::{Avoidance, Flight, Flyer};
+use super::flight::{self, Avoidance, Flight, Flyer};
 use super::params::DEFAULTS_ONLY;
 use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::Rng;
@@ -85,8 +85,15 @@ impl Model for BrownianModel {
     fn step(&self, cx: &Context, i: usize, b: &Flyer) -> Flyer {
         let ri = self.flight.body_radius(b.c.size);
         let mut a_col = Vec3::ZERO;
-        cx.for_each_neighbour(i, ri + cx.max_body_radius, |j, _, d2| {
-            a_col += self.flight.contact(i, &b.c, ri, j, &cx.agents[j], d2);
+        cx.for_each_neighbour(i, ri + cx.max_body_radius, |j, pj, d2| {
+            let o = &cx.agents[j];
+            a_col += self.flight.contact(
+                || flight::separation_fallback(i, j),
+                ri + o.radius,
+                b.c.pos - pj,
+                d2.sqrt(),
+                b.c.vel - o.vel,
+            );
         });
         let mut rng = cx.rng(0xB12, i);
         let xi = Vec3::new(rng.gaussian(), rng.gaussian(), rng.gaussian());
