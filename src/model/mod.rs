@@ -27,6 +27,7 @@ pub use context::{Context, Neighbour, TargetNow};
 pub use params::{ParamSpec, ParamValues, Preset};
 pub use targets::TargetKind;
 
+use crate::geometry::Shape;
 use crate::math::Rng;
 use crate::species::{Channel, Species};
 use glam::{Quat, Vec3};
@@ -142,6 +143,9 @@ pub struct SwarmSetup<'a> {
     pub bounds: Option<(Vec3, Vec3)>,
     /// Indices of the targets that attract this swarm.
     pub targets: Vec<usize>,
+    /// The shot's obstacles: what a model precomputes a field from once per shot (a
+    /// distance or path field), besides querying them each step through the `Context`.
+    pub obstacles: &'a [Shape],
 }
 
 /// Where and how the world places a new agent; the model adds its own state.

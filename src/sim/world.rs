@@ -253,6 +253,7 @@ fn start(shot: &Shot, si: usize, k: usize) -> (Start, Rng) {
 impl Simulation {
     pub fn new(shot: &Shot) -> Self {
         let shot = shot.clone();
+        let obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape).collect();
         let mut swarms: Vec<Box<dyn Swarm>> = Vec::with_capacity(shot.swarms.len());
         let mut first = 0;
         for (si, s) in shot.swarms.iter().enumerate() {
@@ -271,6 +272,7 @@ impl Simulation {
                     .filter(|(_, t)| t.swarms.contains(&si))
                     .map(|(ti, _)| ti)
                     .collect(),
+                obstacles: &obstacles,
             };
             swarms.push(with_model!(s.model, M => {
                 let model = M::new(&setup);
@@ -323,7 +325,7 @@ impl Simulation {
             .fold(0.0, f32::max);
         let mut sim = Simulation {
             frame: shot.frame_start,
-            obstacles: shot.obstacles.iter().map(|o| o.shape).collect(),
+            obstacles,
             shot,
             swarms,
             targets,

@@ -207,6 +207,7 @@ mod tests {
             },
             bounds: None,
             targets: Vec::new(),
+            obstacles: &[],
         })
     }
 
