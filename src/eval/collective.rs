@@ -23,7 +23,8 @@
 //!
 //! Angles between vectors are computed as `atan2(|a × b|, a · b)`, equal to the paper's
 //! arccos of the normalised dot product but exact near 0 and π. Results never contain NaN:
-//! a quantity without any sample to define it is `None`.
+//! a quantity without any sample to define it is `None`. See docs/validation.md, "Paper
+//! 000's comparisons (Figs. 5, 7, 9)".
 
 use crate::error::{Error, Result};
 use glam::{DVec3, Vec3};
@@ -195,7 +196,7 @@ fn close_pairs(points: &[Vec3], d: f64) -> Vec<(u32, u32)> {
 }
 
 /// Index of each point's nearest other point (`None` with fewer than two points). Ties go
-/// to the lower index, so the result does not depend on hashing.
+/// to the lower index, so the result does not depend on the search order.
 ///
 /// Cells are sized so that about one point falls in each (the bounding box's longest side
 /// over ∛n), and the search visits rings of cells at growing Chebyshev distance r from the
@@ -230,7 +231,7 @@ fn nearest_neighbours(points: &[Vec3]) -> Vec<Option<u32>> {
                     let (x, y) = (c[0].saturating_add(dx), c[1].saturating_add(dy));
                     let (z0, z1) = (c[2].saturating_sub(r), c[2].saturating_add(r));
                     // On the ring's x or y faces the whole column of 2r+1 cells; inside
-                    // them only its two end cells (the z faces).
+                    // them only its two end cells (the z faces). (1, 0) is an empty range.
                     let ends: [(i64, i64); 2] = if dx.abs().max(dy.abs()) == r {
                         [(z0, z1), (1, 0)]
                     } else {
