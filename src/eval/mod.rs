@@ -4,6 +4,7 @@
 
 pub mod calibrate;
 pub mod cli;
+pub mod collective;
 pub mod figure;
 pub mod ga;
 pub mod histogram;
