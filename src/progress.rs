@@ -6,6 +6,14 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::{IsTerminal, Write};
 
+/// Writes `text` to stdout. A closed pipe (`beeswarm … | head`) is not worth a panic: the
+/// reader has gone, so the text is dropped and the command carries on.
+pub fn stdout(text: &str) {
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes());
+    let _ = out.flush();
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Mode {
     /// A bar when stderr is a terminal, otherwise nothing.
@@ -83,10 +91,10 @@ impl Reporter {
                         .to_string()
                 })
                 .collect();
-            println!(
-                "{}",
+            stdout(&format!(
+                "{}\n",
                 serde_json::json!({ "event": "done", "outputs": list })
-            );
+            ));
         }
     }
 

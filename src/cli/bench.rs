@@ -91,8 +91,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
         (t.elapsed().as_secs_f64(), peak_rss_mb())
     })?;
     let steps = (a.bees * a.frames) as f64 * a.substeps as f64;
-    println!(
-        "{}",
+    crate::progress::stdout(&format!(
+        "{}\n",
         serde_json::json!({
             "bees": a.bees,
             "frames": a.frames,
@@ -105,7 +105,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
             "bee_frames_per_s": ((a.bees * a.frames) as f64 / seconds).round(),
             "peak_rss_mb": rss,
         })
-    );
+    ));
     Ok(())
 }
 

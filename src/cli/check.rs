@@ -17,7 +17,7 @@ pub struct CheckArgs {
 
 pub fn run(a: CheckArgs) -> Result<()> {
     let shot = crate::shot::load(&a.shot)?;
-    print!("{}", summary(&shot));
+    crate::progress::stdout(&summary(&shot));
     Ok(())
 }
 

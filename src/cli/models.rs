@@ -5,7 +5,6 @@ use crate::error::Result;
 use crate::model::{ModelInfo, ModelKind, ParamValues};
 use clap::Args;
 use std::fmt::Write as _;
-use std::io::Write as _;
 
 #[derive(Args, Debug)]
 #[command(
@@ -29,8 +28,7 @@ pub fn run(a: ModelsArgs) -> Result<()> {
     } else {
         plain()
     };
-    // A closed pipe (`beeswarm models | head`) is not an error worth a panic.
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    crate::progress::stdout(&text);
     Ok(())
 }
 

@@ -422,13 +422,13 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
                 let el = start.elapsed().as_secs_f64();
                 match mode {
                     Mode::Json => {
-                        println!(
-                            "{{\"event\":\"generation\",\"generation\":{},\"total\":{},\"best\":{:.6},\"mean\":{:.6},\"elapsed_s\":{el:.3}}}",
+                        crate::progress::stdout(&format!(
+                            "{{\"event\":\"generation\",\"generation\":{},\"total\":{},\"best\":{:.6},\"mean\":{:.6},\"elapsed_s\":{el:.3}}}\n",
                             g.index + 1,
                             cfg.generations,
                             g.best,
                             g.mean
-                        );
+                        ));
                     }
                     Mode::None => {}
                     _ => eprintln!(

@@ -238,8 +238,7 @@ pub fn print_table(r: &Report) {
         }
         out.push('\n');
     }
-    print!("{out}");
-    let _ = std::io::stdout().flush();
+    crate::progress::stdout(&out);
 }
 
 /// ΔE per metric (lowest in bold) and the scores, as a Markdown table.
