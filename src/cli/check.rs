@@ -1,7 +1,7 @@
 //! `beeswarm check`: validate a shot and say what a bake would produce.
 
 use crate::error::Result;
-use crate::shot::{Shape, Shot};
+use crate::shot::{Region, Shape, Shot, Swarm, defaults};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -19,6 +19,55 @@ pub fn run(a: CheckArgs) -> Result<()> {
     let shot = crate::shot::load(&a.shot)?;
     crate::progress::stdout(&summary(&shot));
     Ok(())
+}
+
+/// A length in metres, to the millimetre.
+fn mm(v: f32) -> String {
+    num((v as f64 * 1000.0).round() / 1000.0)
+}
+
+/// The swarm's starting density, and a warning when agents start with more neighbours than
+/// a step handles at its usual cost.
+fn crowding(w: &Swarm) -> String {
+    let (shape, volume) = match w.spawn {
+        Region::Box { half, .. } => (
+            format!(
+                "box {} × {} × {} m",
+                mm(2.0 * half.x),
+                mm(2.0 * half.y),
+                mm(2.0 * half.z)
+            ),
+            8.0 * (half.x * half.y * half.z) as f64,
+        ),
+        Region::Sphere { radius, .. } => (
+            format!("sphere of radius {} m", mm(radius)),
+            4.0 / 3.0 * std::f64::consts::PI * (radius as f64).powi(3),
+        ),
+    };
+    let density = w.count as f64 / volume;
+    let mut line = format!(
+        "      spawn: {shape}, {} agents per m³",
+        num(density.round())
+    );
+    if let Some(h) = w.params.get("neighbour_radius") {
+        let neighbours = density * 4.0 / 3.0 * std::f64::consts::PI * h.powi(3);
+        line += &format!(
+            " (about {} neighbours within {} m)",
+            num(neighbours.round()),
+            num(h)
+        );
+        if neighbours > defaults::CROWDED_NEIGHBOURS {
+            line += &format!(
+                "\n      warning: more than {} neighbours per agent makes every step far slower; \
+                 give the swarm a larger spawn region (at most {} agents per m³ here)",
+                defaults::CROWDED_NEIGHBOURS,
+                num((defaults::CROWDED_NEIGHBOURS
+                    / (4.0 / 3.0 * std::f64::consts::PI * h.powi(3)))
+                .floor())
+            );
+        }
+    }
+    line
 }
 
 /// A human-readable summary of a valid shot.
@@ -62,6 +111,7 @@ pub fn summary(shot: &Shot) -> String {
             })
             .collect();
         let _ = writeln!(s, "      params: {}", params.join(", "));
+        let _ = writeln!(s, "{}", crowding(w));
     }
     let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
     for o in &shot.obstacles {

@@ -11,6 +11,23 @@ pub const MODEL: &str = "bee";
 
 pub const SPAWN_CENTER: [f64; 3] = [0.0, 1.0, 0.0];
 pub const SPAWN_SIZE: [f64; 3] = [1.0, 1.0, 1.0];
+/// A spawn box without a `size` holds at most this many agents per cubic metre: it is the
+/// 1 m cube up to 500 agents and grows with the count beyond (a real swarm cluster is
+/// denser, but a shot that names no region wants room to fly, not a crush).
+pub const SPAWN_DENSITY: f64 = 500.0;
+
+/// The default spawn box for `count` agents: `SPAWN_SIZE` up to `SPAWN_DENSITY` agents per
+/// m³, else a cube of `count / SPAWN_DENSITY` m³; its default centre keeps it above the
+/// ground (y = 0) at `SPAWN_CENTER`'s height or higher. Returns (centre, size).
+pub fn spawn_box(count: i64) -> ([f64; 3], [f64; 3]) {
+    let side = (count as f64 / SPAWN_DENSITY).cbrt().max(SPAWN_SIZE[0]);
+    let y = SPAWN_CENTER[1].max(side / 2.0);
+    ([SPAWN_CENTER[0], y, SPAWN_CENTER[2]], [side; 3])
+}
+/// `check` warns when a swarm starts with more than this many neighbours, on average,
+/// within its model's neighbour radius: beyond it each agent's neighbour sums and the
+/// neighbour cache (40 entries) overflow, and a step costs many times more per agent.
+pub const CROWDED_NEIGHBOURS: f64 = 40.0;
 /// Default soft bounds: the spawn box grown by this margin on every side, m.
 pub const BOUNDS_MARGIN: f64 = 1.5;
 

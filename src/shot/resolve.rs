@@ -612,7 +612,8 @@ fn resolve_swarm(
     }
 
     let rsp = rs.spawn.clone().unwrap_or_default();
-    let center = cx.vec(&k("spawn.center"), rsp.center.unwrap_or(d::SPAWN_CENTER))?;
+    let (auto_center, auto_size) = d::spawn_box(count);
+    let center = cx.vec(&k("spawn.center"), rsp.center.unwrap_or(auto_center))?;
     let shape = cx.one_of(
         &k("spawn.shape"),
         rsp.shape.as_deref().unwrap_or("box"),
@@ -639,7 +640,7 @@ fn resolve_swarm(
     let spawn = match shape {
         "box" => Region::Box {
             center,
-            half: cx.size(&k("spawn.size"), rsp.size.unwrap_or(d::SPAWN_SIZE))? * 0.5,
+            half: cx.size(&k("spawn.size"), rsp.size.unwrap_or(auto_size))? * 0.5,
         },
         _ => Region::Sphere {
             center,
@@ -722,7 +723,7 @@ fn resolve_swarm(
         Some(b) => {
             let c = cx.vec(
                 &k("bounds.center"),
-                b.center.unwrap_or(rsp.center.unwrap_or(d::SPAWN_CENTER)),
+                b.center.unwrap_or(rsp.center.unwrap_or(auto_center)),
             )?;
             let s = cx.size(
                 &k("bounds.size"),
