@@ -762,6 +762,18 @@ fn bad_bench_options_name_the_option() {
             &["--frames", "200000"][..],
             "error: --frames: expected at most 100000 frames",
         ),
+        (
+            &["--model", "wasp"][..],
+            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", found \"wasp\"",
+        ),
+        (
+            &["--model", "boids", "--preset", "nest"][..],
+            "error: --preset: the boids model has no preset \"nest\"",
+        ),
+        (
+            &["--density", "0"][..],
+            "error: --density: expected bees per cubic metre from 0.001 to 1e7, found 0",
+        ),
     ] {
         let mut all = vec!["bench", "--bees", "10"];
         all.extend_from_slice(args);
