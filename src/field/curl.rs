@@ -7,7 +7,7 @@
 //! ([`SCENE_UNIT_M`]); the result is an acceleration in m/s²
 //! (one scene force unit per unit mass = 1 m/s², see docs/model.md).
 
-use super::noise::{LatticePoint, Perlin};
+use super::noise::{LatticePoint, Perlin, gradients3};
 use glam::Vec3;
 
 /// Metres per scene length unit of paper 000, whose Table I (h, L) and Eq. 8's gain are
@@ -43,10 +43,7 @@ impl CurlNoise {
         let xi = p * self.inv_cell;
         // The three potentials differ by their permutation tables alone, so they share
         // the lattice point.
-        let lp = LatticePoint::new(xi);
-        let g1 = self.potentials[0].sample_at(&lp).1;
-        let g2 = self.potentials[1].sample_at(&lp).1;
-        let g3 = self.potentials[2].sample_at(&lp).1;
+        let [g1, g2, g3] = gradients3(&self.potentials, &LatticePoint::new(xi));
         // Eq. 9: (∂ψz/∂y − ∂ψy/∂z, ∂ψx/∂z − ∂ψz/∂x, ∂ψy/∂x − ∂ψx/∂y).
         Vec3::new(g3.y - g2.z, g1.z - g3.x, g2.x - g1.y) * self.gain
     }

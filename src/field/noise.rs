@@ -4,7 +4,7 @@
 //! analytic gradient is exact and about as cheap as one extra noise sample, where finite
 //! differences would need six samples per potential and add truncation error.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// One seeded noise function.
 #[derive(Clone, Debug)]
@@ -57,6 +57,28 @@ impl Perlin {
         Perlin { perm }
     }
 
+    /// Corner hashes p[p[p[x] + y] + z] of the lattice cell at (ix, iy, iz), sharing the
+    /// inner lookups between corners (14 table reads instead of 24). Corner order: bit 0 =
+    /// x, bit 1 = y, bit 2 = z. `& 511` lets the compiler drop bounds checks.
+    #[inline]
+    fn corner_hashes(&self, ix: usize, iy: usize, iz: usize) -> [u8; 8] {
+        let p = &self.perm;
+        let a = p[ix] as usize + iy;
+        let b = p[(ix + 1) & 511] as usize + iy;
+        let (aa, ab) = (p[a & 511] as usize + iz, p[(a + 1) & 511] as usize + iz);
+        let (ba, bb) = (p[b & 511] as usize + iz, p[(b + 1) & 511] as usize + iz);
+        [
+            p[aa & 511],
+            p[ba & 511],
+            p[ab & 511],
+            p[bb & 511],
+            p[(aa + 1) & 511],
+            p[(ba + 1) & 511],
+            p[(ab + 1) & 511],
+            p[(bb + 1) & 511],
+        ]
+    }
+
     /// Noise value and its gradient at `x` (lattice spacing 1).
     pub fn sample(&self, x: Vec3) -> (f32, Vec3) {
         self.sample_at(&LatticePoint::new(x))
@@ -73,24 +95,7 @@ impl Perlin {
             w: [u, v, w],
             dw: [du, dv, dw],
         } = *lp;
-        // Corner hashes p[p[p[x] + y] + z], sharing the inner lookups between corners
-        // (14 table reads instead of 24). `& 511` lets the compiler drop bounds checks.
-        let p = &self.perm;
-        let a = p[ix] as usize + iy;
-        let b = p[(ix + 1) & 511] as usize + iy;
-        let (aa, ab) = (p[a & 511] as usize + iz, p[(a + 1) & 511] as usize + iz);
-        let (ba, bb) = (p[b & 511] as usize + iz, p[(b + 1) & 511] as usize + iz);
-        // Corner order: bit 0 = x, bit 1 = y, bit 2 = z.
-        let hashes = [
-            p[aa & 511],
-            p[ba & 511],
-            p[ab & 511],
-            p[bb & 511],
-            p[(aa + 1) & 511],
-            p[(ba + 1) & 511],
-            p[(ab + 1) & 511],
-            p[(bb + 1) & 511],
-        ];
+        let hashes = self.corner_hashes(ix, iy, iz);
         let mut g = [[0.0f32; 3]; 8];
         let mut c = [0.0f32; 8];
         for (k, h) in hashes.into_iter().enumerate() {
@@ -133,6 +138,69 @@ impl Perlin {
         let gb = lerp3(gx0, gx1, w);
         (value, Vec3::new(gb[0] + dx, gb[1] + dy, gb[2] + dz))
     }
+}
+
+/// The gradients of three noise functions at one point (the curl's three potentials),
+/// side by side in the lanes of a 4-wide vector: each lane does exactly the arithmetic of
+/// [`Perlin::sample_at`], in the same order, so each gradient is bit-identical to that
+/// function's, at about half its cost.
+pub fn gradients3(noise: &[Perlin; 3], lp: &LatticePoint) -> [Vec3; 3] {
+    let LatticePoint {
+        ix,
+        iy,
+        iz,
+        f: [fx, fy, fz],
+        w: [u, v, w],
+        dw: [du, dv, dw],
+    } = *lp;
+    let hashes = [
+        noise[0].corner_hashes(ix, iy, iz),
+        noise[1].corner_hashes(ix, iy, iz),
+        noise[2].corner_hashes(ix, iy, iz),
+    ];
+    // Per corner: the gradient's x, y, z components, one potential per lane.
+    let mut gx = [Vec4::ZERO; 8];
+    let mut gy = [Vec4::ZERO; 8];
+    let mut gz = [Vec4::ZERO; 8];
+    let mut c = [Vec4::ZERO; 8];
+    for k in 0..8 {
+        let g = |n: usize| GRADS[(hashes[n][k] & 15) as usize];
+        let (g0, g1, g2) = (g(0), g(1), g(2));
+        gx[k] = Vec4::new(g0[0], g1[0], g2[0], 0.0);
+        gy[k] = Vec4::new(g0[1], g1[1], g2[1], 0.0);
+        gz[k] = Vec4::new(g0[2], g1[2], g2[2], 0.0);
+        let d = [
+            fx - (k & 1) as f32,
+            fy - ((k >> 1) & 1) as f32,
+            fz - ((k >> 2) & 1) as f32,
+        ];
+        c[k] = gx[k] * d[0] + gy[k] * d[1] + gz[k] * d[2];
+    }
+    let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
+    let x00 = lerp(c[0], c[1], u);
+    let x10 = lerp(c[2], c[3], u);
+    let x01 = lerp(c[4], c[5], u);
+    let x11 = lerp(c[6], c[7], u);
+    let y0 = lerp(x00, x10, v);
+    let y1 = lerp(x01, x11, v);
+    let dx = lerp(
+        lerp(c[1] - c[0], c[3] - c[2], v),
+        lerp(c[5] - c[4], c[7] - c[6], v),
+        w,
+    ) * du;
+    let dy = lerp(x10 - x00, x11 - x01, w) * dv;
+    let dz = (y1 - y0) * dw;
+    let blend = |g: &[Vec4; 8]| {
+        let g0 = lerp(lerp(g[0], g[1], u), lerp(g[2], g[3], u), v);
+        let g1 = lerp(lerp(g[4], g[5], u), lerp(g[6], g[7], u), v);
+        lerp(g0, g1, w)
+    };
+    let (bx, by, bz) = (blend(&gx) + dx, blend(&gy) + dy, blend(&gz) + dz);
+    [
+        Vec3::new(bx.x, by.x, bz.x),
+        Vec3::new(bx.y, by.y, bz.y),
+        Vec3::new(bx.z, by.z, bz.z),
+    ]
 }
 
 /// A point's lattice cell, fractional position, blend weights and their derivatives.
@@ -192,6 +260,29 @@ mod tests {
                 (p.sample(x + Vec3::Z * e).0 - p.sample(x - Vec3::Z * e).0) / (2.0 * e),
             );
             assert!((g - fd).length() < 5e-3, "at {x}: {g} vs {fd}");
+        }
+    }
+
+    #[test]
+    fn three_gradients_side_by_side_are_bit_identical_to_one_at_a_time() {
+        let noise = [Perlin::new(11), Perlin::new(11 ^ 0x1111), Perlin::new(12)];
+        let mut rng = crate::math::Rng::new(4, 5, 6);
+        for _ in 0..20_000 {
+            let x = Vec3::new(
+                rng.range(-300.0, 300.0),
+                rng.range(-300.0, 300.0),
+                rng.range(-300.0, 300.0),
+            );
+            let lp = LatticePoint::new(x);
+            let three = gradients3(&noise, &lp);
+            for (n, g) in noise.iter().zip(three) {
+                let one = n.sample_at(&lp).1;
+                assert_eq!(
+                    g.to_array().map(f32::to_bits),
+                    one.to_array().map(f32::to_bits),
+                    "at {x}"
+                );
+            }
         }
     }
 
