@@ -913,3 +913,27 @@ fn parameters_and_presets_are_checked_against_the_swarms_model() {
         run.stdout
     );
 }
+
+#[test]
+fn fixed_length_lists_have_exactly_their_length() {
+    let err = refuse("[scene]\nframes = [1, 24, 99]\n[[swarm]]\ncount = 3\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:10:",
+            "key `scene.frames`",
+            "expected a list of two frame numbers [start, end], found 3 elements",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nspawn = { center = [0, 1, 0, 99] }\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:20:",
+            "key `swarm[0].spawn.center`",
+            "expected a list of three numbers [x, y, z], found 4 elements",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\n[wind]\nvelocity = [1, 0, 0, 0, 0]\n");
+    assert_says(&err, &["key `wind.velocity`", "found 5 elements"]);
+}

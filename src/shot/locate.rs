@@ -16,6 +16,21 @@ pub struct Locator<'a> {
     /// Non-finite floats found anywhere (TOML allows `nan` and `inf`): path and the value
     /// as written (`nan`, `inf` or `-inf`).
     pub non_finite: Vec<(String, &'static str)>,
+    /// Lists longer than their fixed length (`center = [0, 1, 0, 99]`): path, expected
+    /// length, found length. Deserializing into `[f64; 3]` reads the first three and would
+    /// silently ignore the rest.
+    pub too_long: Vec<(String, usize, usize)>,
+}
+
+/// Keys whose value is a list of fixed length, by their last path segment.
+fn fixed_length(path: &str) -> Option<usize> {
+    let key = path.rsplit('.').next().unwrap_or(path);
+    match key {
+        "frames" => Some(2),
+        "center" | "size" | "position" | "velocity" | "rotation" | "a" | "b" | "point"
+        | "normal" => Some(3),
+        _ => None,
+    }
 }
 
 impl<'a> Locator<'a> {
@@ -24,6 +39,7 @@ impl<'a> Locator<'a> {
             src,
             spans: BTreeMap::new(),
             non_finite: Vec::new(),
+            too_long: Vec::new(),
         };
         if let Ok(doc) = ImDocument::parse(src.to_owned()) {
             loc.walk_table(doc.as_table(), "");
@@ -82,6 +98,9 @@ impl<'a> Locator<'a> {
                 self.non_finite.push((path.to_owned(), text));
             }
             Value::Array(a) => {
+                if let Some(n) = fixed_length(path).filter(|n| a.len() > *n) {
+                    self.too_long.push((path.to_owned(), n, a.len()));
+                }
                 for (i, x) in a.iter().enumerate() {
                     self.walk_value(x, &format!("{path}[{i}]"), x.span());
                 }

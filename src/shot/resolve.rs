@@ -78,6 +78,13 @@ impl Ctx<'_> {
         if let Some((p, v)) = self.loc.non_finite.first() {
             return Err(self.err(p, format!("expected a finite number, found {v}")));
         }
+        if let Some((p, n, found)) = self.loc.too_long.first() {
+            let what = match n {
+                2 => "a list of two frame numbers [start, end]",
+                _ => "a list of three numbers [x, y, z]",
+            };
+            return Err(self.err(p, format!("expected {what}, found {found} elements")));
+        }
         Ok(value)
     }
 
