@@ -53,8 +53,26 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The most worker threads a command accepts: four per core. More only adds switching
+/// (results are the same for any count), and `--threads 100000` would spawn them all.
+pub fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `--threads`: 0 (all cores) up to [`max_threads`], else an input error.
+pub fn check_threads(threads: usize) -> Result<usize> {
+    if threads > max_threads() {
+        return Err(Error::input(format!(
+            "--threads: expected 0 (all cores) up to {} (four per core), found {threads}",
+            max_threads()
+        )));
+    }
+    Ok(threads)
+}
+
 /// Runs `f` on a pool of `threads` workers (0 = all cores).
 pub fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> Result<T> {
+    let threads = check_threads(threads)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -937,3 +937,97 @@ fn fixed_length_lists_have_exactly_their_length() {
     let err = refuse("[[swarm]]\ncount = 3\n[wind]\nvelocity = [1, 0, 0, 0, 0]\n");
     assert_says(&err, &["key `wind.velocity`", "found 5 elements"]);
 }
+
+#[test]
+fn numeric_options_are_bounded_and_unusable_references_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("shot.toml"), "[[swarm]]\ncount = 3\n").unwrap();
+    // Three insects of three samples each: nothing to measure.
+    let mut short = String::from("id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw\n");
+    for i in 1..=3 {
+        for f in 1..=3 {
+            short += &format!("{i},{f},0.0{f},0,1,0,0,0,0,0,0,0,1\n");
+        }
+    }
+    std::fs::write(p.join("short.csv"), short).unwrap();
+    for (args, says) in [
+        (
+            &["bake", "shot.toml", "--threads", "100000"][..],
+            "--threads: expected 0 (all cores) up to",
+        ),
+        (
+            &["bench", "--threads", "100000"][..],
+            "--threads: expected 0 (all cores) up to",
+        ),
+        (
+            &[
+                "eval",
+                "short.csv",
+                "--reference",
+                "short.csv",
+                "--dt",
+                "1e-12",
+            ][..],
+            "--dt: expected a resampling step from 0.0001 to 10 seconds",
+        ),
+        (
+            &[
+                "eval",
+                "short.csv",
+                "--reference",
+                "short.csv",
+                "--dt",
+                "1e30",
+            ][..],
+            "--dt: expected a resampling step from 0.0001 to 10 seconds",
+        ),
+        (
+            &[
+                "eval",
+                "short.csv",
+                "--reference",
+                "short.csv",
+                "--bins",
+                "1000000000",
+            ][..],
+            "--bins: expected a whole number of bins from 1 to 10000",
+        ),
+        (
+            &[
+                "eval",
+                "short.csv",
+                "--reference",
+                "short.csv",
+                "--min-speed",
+                "nan",
+            ][..],
+            "--min-speed: expected a speed from 0 to 100 m/s, found NaN",
+        ),
+        (
+            &["eval", "short.csv", "--reference", "short.csv"][..],
+            "short.csv: no usable track in the reference",
+        ),
+        (
+            &[
+                "calibrate",
+                "--reference",
+                "short.csv",
+                "--shot",
+                "shot.toml",
+                "--out",
+                "fit.toml",
+                "--generations",
+                "1",
+                "--population",
+                "2",
+            ][..],
+            "short.csv: no usable track in the reference",
+        ),
+    ] {
+        let run = beeswarm(p, args);
+        assert_eq!(run.code, 2, "{args:?}: {}", run.stderr);
+        assert_says(&run.stderr, &[says]);
+    }
+    assert_only(p, &["shot.toml", "short.csv"]);
+}

@@ -54,6 +54,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         shot.frame_start = s;
         shot.frame_end = e;
     }
+    crate::bake::check_threads(a.threads)?;
     let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
     check_out_dir(&out_dir, a.out.is_some())?;
     let formats = if a.format.is_empty() {

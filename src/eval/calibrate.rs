@@ -355,18 +355,30 @@ fn command_line() -> String {
 }
 
 pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
-    if args.population < 2 {
-        return Err(Error::input("--population must be at least 2"));
-    }
-    if args.generations < 1 {
-        return Err(Error::input("--generations must be at least 1"));
-    }
-    if args.bins == 0 {
-        return Err(Error::input("--bins must be at least 1"));
-    }
-    if args.seeds == 0 {
-        return Err(Error::input("--seeds must be at least 1"));
-    }
+    use super::cli::{check_bins, check_range};
+    check_range(
+        "--population",
+        args.population as f64,
+        2.0,
+        10_000.0,
+        "a population from 2 to 10000",
+    )?;
+    check_range(
+        "--generations",
+        args.generations as f64,
+        1.0,
+        100_000.0,
+        "from 1 to 100000 generations",
+    )?;
+    check_bins(args.bins)?;
+    check_range(
+        "--seeds",
+        args.seeds as f64,
+        1.0,
+        1000.0,
+        "from 1 to 1000 simulation seeds",
+    )?;
+    crate::bake::check_threads(args.threads)?;
     let shot = crate::shot::load(&args.shot)?;
     if shot.swarms.is_empty() {
         return Err(Error::input(format!(
@@ -387,6 +399,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         tail: TAIL,
     };
     let reference = Reference::new(measure(&real, &settings, false), settings.bins);
+    reference.check_usable(&args.reference.display().to_string())?;
     let cfg = GaConfig {
         population: args.population,
         generations: args.generations,
@@ -394,7 +407,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         ..GaConfig::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
+        .num_threads(crate::bake::check_threads(args.threads)?)
         .build()
         .map_err(|e| Error::bake(format!("cannot start worker threads: {e}")))?;
     let mode = match args.progress {

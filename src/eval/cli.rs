@@ -90,20 +90,56 @@ pub fn default_dt(steps: &[f64]) -> Option<f64> {
     (dt > 0.0).then(|| (dt * 1e6).round() / 1e6)
 }
 
+/// A numeric option within its range, or an input error naming it. Every size the
+/// evaluation allocates follows from these (samples per track = duration / dt, one
+/// histogram of `bins` per metric), so none may be unbounded.
+pub(crate) fn check_range(option: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(Error::input(format!(
+            "{option}: expected {what}, found {v}"
+        )))
+    }
+}
+
+/// The histogram bins: 1 to 10,000.
+pub(crate) fn check_bins(bins: usize) -> Result<usize> {
+    check_range(
+        "--bins",
+        bins as f64,
+        1.0,
+        10_000.0,
+        "a whole number of bins from 1 to 10000",
+    )?;
+    Ok(bins)
+}
+
 pub fn run_eval(args: &EvalArgs) -> Result<()> {
-    if args.bins == 0 {
-        return Err(Error::input("--bins must be at least 1"));
+    check_bins(args.bins)?;
+    if let Some(dt) = args.dt {
+        check_range(
+            "--dt",
+            dt,
+            1e-4,
+            10.0,
+            "a resampling step from 0.0001 to 10 seconds",
+        )?;
     }
-    if let Some(dt) = args.dt
-        && !(dt.is_finite() && dt > 0.0)
-    {
-        return Err(Error::input(format!(
-            "--dt must be a positive number of seconds, found {dt}"
-        )));
-    }
-    if !(args.density_radius.is_finite() && args.density_radius > 0.0) {
-        return Err(Error::input("--density-radius must be positive"));
-    }
+    check_range(
+        "--density-radius",
+        args.density_radius,
+        1e-4,
+        100.0,
+        "a radius from 0.0001 to 100 m",
+    )?;
+    check_range(
+        "--min-speed",
+        args.min_speed,
+        0.0,
+        100.0,
+        "a speed from 0 to 100 m/s",
+    )?;
     for s in std::iter::once(&args.tracks).chain(&args.candidates) {
         if named_paths(s).1.iter().any(|p| p.as_os_str().is_empty()) {
             return Err(Error::input(format!(
@@ -161,6 +197,7 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         })
         .collect();
     let reference = Reference::new(measure(&reference, &settings, true), settings.bins);
+    reference.check_usable(&args.reference.display().to_string())?;
     let report = compare(settings, &reference, &measured);
 
     print_table(&report);

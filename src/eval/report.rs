@@ -150,6 +150,28 @@ impl Reference {
         }
     }
 
+    /// An input error when the reference supports none of the single-insect metrics (every
+    /// track too short, or resting): nothing could be compared with it, so a report or a
+    /// calibration against it would be empty.
+    pub fn check_usable(&self, name: &str) -> crate::error::Result<()> {
+        let single: Vec<&Result<(Bins, Vec<f64>), String>> = Metric::SINGLE
+            .iter()
+            .map(|m| &self.per_metric[m.index()])
+            .collect();
+        if single.iter().any(|r| r.is_ok()) {
+            return Ok(());
+        }
+        let why = single
+            .first()
+            .and_then(|r| r.as_ref().err())
+            .cloned()
+            .unwrap_or_default();
+        Err(crate::error::Error::input(format!(
+            "{name}: no usable track in the reference ({why}); it needs insects tracked \
+             over at least {MIN_SAMPLES} samples"
+        )))
+    }
+
     /// ΔE (Eq. 20) of a candidate per metric, or why it cannot be computed.
     pub fn distance(&self, m: Metric, candidate: &Samples) -> Result<f64, String> {
         let (b, p) = self.per_metric[m.index()].as_ref().map_err(Clone::clone)?;
