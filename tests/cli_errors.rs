@@ -1031,3 +1031,45 @@ fn numeric_options_are_bounded_and_unusable_references_refused() {
     }
     assert_only(p, &["shot.toml", "short.csv"]);
 }
+
+#[test]
+fn check_refuses_what_bake_would_fail_on() {
+    // A number TOML cannot hold names its key.
+    let err = refuse("[[swarm]]\ncount = 9223372036854775808\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:2:9:",
+            "key `count`",
+            "expected a whole number from",
+        ],
+    );
+    // Names longer than a file name can hold.
+    let long = "a".repeat(101);
+    let err = refuse(format!(
+        "[scene]\nname = \"{long}\"\n[[swarm]]\ncount = 3\n"
+    ));
+    assert_says(
+        &err,
+        &["key `scene.name`", "at most 100 characters, found 101"],
+    );
+    let err = refuse(format!("[[swarm]]\ncount = 3\nname = \"{long}\"\n"));
+    assert_says(
+        &err,
+        &["key `swarm[0].name`", "at most 100 characters, found 101"],
+    );
+    // The wind is a velocity: its limit is inclusive and in m/s.
+    let err = refuse("[[swarm]]\ncount = 3\n[wind]\nvelocity = [1000001, 0, 0]\n");
+    assert_says(&err, &["key `wind.velocity`", "within ±1000000 m/s"]);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("shot.toml"),
+        "[[swarm]]\ncount = 3\n[wind]\nvelocity = [1000000, 0, -1000000]\n",
+    )
+    .unwrap();
+    assert_eq!(
+        beeswarm(dir.path(), &["check", "shot.toml"]).code,
+        0,
+        "the documented limit itself is valid"
+    );
+}

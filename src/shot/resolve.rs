@@ -9,6 +9,10 @@ use crate::error::ShotError;
 use crate::model::ParamValues;
 use glam::Quat;
 
+/// The longest scene or swarm name: names become file, node and prim names, and a file
+/// name (with the writers' suffixes) must stay under the 255 bytes file systems allow.
+const MAX_NAME: usize = 100;
+
 struct Ctx<'a> {
     file: &'a Path,
     loc: Locator<'a>,
@@ -109,11 +113,20 @@ impl Ctx<'_> {
         self.range(path, v, 0.0, f64::MAX, "a number of at least 0")
     }
 
+    /// A position or extent, metres, each component within ±1,000,000.
     fn vec(&self, path: &str, v: V3) -> Result<Vec3, ShotError> {
-        if v.iter().all(|x| x.is_finite() && x.abs() < 1e6) {
+        self.vec_in(path, v, "m")
+    }
+
+    /// Three finite numbers within ±1,000,000 `unit`.
+    fn vec_in(&self, path: &str, v: V3, unit: &str) -> Result<Vec3, ShotError> {
+        if v.iter().all(|x| x.is_finite() && x.abs() <= 1e6) {
             Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
         } else {
-            Err(self.err(path, "expected three finite numbers within ±1e6 m"))
+            Err(self.err(
+                path,
+                format!("expected three finite numbers within ±1000000 {unit}, found {v:?}"),
+            ))
         }
     }
 
@@ -237,6 +250,18 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         loc: Locator::new(src),
     };
     let raw: RawShot = cx.deserialize(src).map_err(|mut e| {
+        if e.message.contains("number too large") {
+            // The text does not parse, so no key is located: name the key on that line.
+            let key = e
+                .source_line
+                .as_deref()
+                .and_then(|l| l.split_once('='))
+                .map(|(k, _)| k.trim().to_owned())
+                .unwrap_or_default();
+            e.key = key;
+            e.message = "expected a whole number from -9223372036854775808 to 9223372036854775807 (far beyond any valid value here)".to_owned();
+            return e;
+        }
         // A syntax error has no key: say plainly the text is not TOML.
         if e.hint.is_none() && e.key.is_empty() && !e.message.contains("missing field") {
             e.message = format!("not valid TOML: {}", e.message);
@@ -252,6 +277,16 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         .filter(|s| !s.is_empty() && !s.starts_with('<'))
         .unwrap_or_else(|| d::SHOT_NAME.to_owned());
     let name = scene.name.clone().unwrap_or(default_name);
+    if name.chars().count() > MAX_NAME {
+        return Err(cx.hint(
+            "scene.name",
+            format!(
+                "expected a name of at most {MAX_NAME} characters, found {}",
+                name.chars().count()
+            ),
+            "the name becomes the output file names, which file systems limit to 255 bytes",
+        ));
+    }
     if name.is_empty()
         || !name
             .chars()
@@ -351,7 +386,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
         targets.push(resolve_target(&cx, i, rt, &swarms)?);
     }
     let wind = match raw.wind.as_ref().and_then(|w| w.velocity) {
-        Some(v) => cx.vec("wind.velocity", v)?,
+        Some(v) => cx.vec_in("wind.velocity", v, "m/s")?,
         None => Vec3::ZERO,
     };
 
@@ -540,6 +575,15 @@ fn resolve_swarm(
             format!("{}_{}", d::SWARM_NAME, i + 1)
         }
     });
+    if name.chars().count() > MAX_NAME {
+        return Err(cx.err(
+            &k("name"),
+            format!(
+                "expected a name of at most {MAX_NAME} characters, found {}",
+                name.chars().count()
+            ),
+        ));
+    }
     if !is_identifier(&name) {
         return Err(cx.hint(&k("name"), format!("expected a name of letters, digits and _ not starting with a digit, found \"{name}\""), "swarm names become node and prim names in the caches"));
     }
