@@ -17,6 +17,7 @@ pub mod math;
 pub mod model;
 pub mod shot;
 pub mod sim;
+pub mod species;
 
 pub use error::{Error, Result};
 pub mod eval;

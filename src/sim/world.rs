@@ -430,7 +430,9 @@ impl Simulation {
                 .map(|s| SwarmMeta {
                     name: s.name.clone(),
                     count: s.count,
-                    bee_length_m: s.bee.length,
+                    species: &crate::species::HONEYBEE,
+                    channels: crate::species::BEE_CHANNELS.to_vec(),
+                    body_length_m: s.bee.length,
                     wing_beat_hz: s.bee.wing_beat_hz,
                 })
                 .collect(),
@@ -802,12 +804,17 @@ impl Simulation {
             f.heading.clear();
             f.heading
                 .extend(bees.iter().map(|b| Quat::from_rotation_y(b.yaw)));
-            f.pitch_deg.clear();
-            f.pitch_deg.extend(bees.iter().map(|b| b.pitch_deg));
-            f.roll_deg.clear();
-            f.roll_deg.extend(bees.iter().map(|b| b.roll_deg));
-            f.sway_m.clear();
-            f.sway_m.extend(
+            // Channels: BEE_CHANNELS, pitch, roll, sway.
+            f.channels.resize_with(3, Vec::new);
+            let [pitch, roll, sway] = &mut f.channels[..] else {
+                unreachable!("three channels")
+            };
+            pitch.clear();
+            pitch.extend(bees.iter().map(|b| b.pitch_deg));
+            roll.clear();
+            roll.extend(bees.iter().map(|b| b.roll_deg));
+            sway.clear();
+            sway.extend(
                 bees.iter()
                     .zip(&f.heading)
                     .map(|(b, h)| (b.pos - b.mean_pos).dot(*h * Vec3::Z)),
