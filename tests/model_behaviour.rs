@@ -23,7 +23,9 @@ fn lone_bee(obstacles: &str, frames: u32) -> Simulation {
 fn roll_and_z(obstacles: &str, frames: u32) -> Vec<(f32, f32, f32)> {
     let mut out = Vec::new();
     let sim = lone_bee(obstacles, frames);
-    let roll = sim.meta().swarms[0].channel("roll").expect("a roll channel");
+    let roll = sim.meta().swarms[0]
+        .channel("roll")
+        .expect("a roll channel");
     run_with(sim, |sim| {
         let s = &sim.record()[0];
         out.push((s.position[0].x, s.channels[roll][0], s.position[0].z));
@@ -172,7 +174,9 @@ fn a_swarm_passing_a_row_of_shafts_has_zero_penetrations() {
     let mut penetrations = 0;
     let mut rolled = 0;
     let sim = Simulation::new(&sh);
-    let roll = sim.meta().swarms[0].channel("roll").expect("a roll channel");
+    let roll = sim.meta().swarms[0]
+        .channel("roll")
+        .expect("a roll channel");
     let frames = run_with(sim, |sim| {
         assert_all_finite(sim);
         rolled += sim.record()[0].channels[roll]

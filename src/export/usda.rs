@@ -368,8 +368,8 @@ impl UsdaWriter {
                 s.angular_velocity_deg.len(),
                 s.scale.len(),
             ];
-            let channels_ok = s.channels.len() == m.channels.len()
-                && s.channels.iter().all(|c| c.len() == n);
+            let channels_ok =
+                s.channels.len() == m.channels.len() && s.channels.iter().all(|c| c.len() == n);
             if n != m.count || lens.iter().any(|&l| l != n) || !channels_ok {
                 return Err(Error::bake(format!(
                     "USDA writer: swarm \"{}\" at frame {} has {n} ids and per-bee arrays of \

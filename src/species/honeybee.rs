@@ -142,6 +142,10 @@ mod tests {
         assert_eq!((HONEYBEE.meshes)(0.012).len(), HONEYBEE.parts.len());
         assert_eq!((HONEYBEE.proxies)(0.012).len(), HONEYBEE.parts.len());
         let lateral = HONEYBEE.lateral_offset.unwrap();
-        assert!(BEE_CHANNELS.iter().any(|c| c.name == lateral && c.unit == "m"));
+        assert!(
+            BEE_CHANNELS
+                .iter()
+                .any(|c| c.name == lateral && c.unit == "m")
+        );
     }
 }

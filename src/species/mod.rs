@@ -90,14 +90,18 @@ impl Species {
                     self.name, p.name
                 ));
             }
-            if let Drive::Channel { channel, .. } = p.drive {
-                if !channels.iter().any(|c| c.name == channel) {
-                    return Err(format!(
-                        "species {}: part {} is driven by channel \"{channel}\", which the \
-                         model does not record",
-                        self.name, p.name
-                    ));
+            let missing = match p.drive {
+                Drive::Channel { channel, .. } => {
+                    (!channels.iter().any(|c| c.name == channel)).then_some(channel)
                 }
+                _ => None,
+            };
+            if let Some(channel) = missing {
+                return Err(format!(
+                    "species {}: part {} is driven by channel \"{channel}\", which the \
+                     model does not record",
+                    self.name, p.name
+                ));
             }
         }
         Ok(())
@@ -124,10 +128,7 @@ pub enum Drive {
     /// hinge line), tip up positive; the right wing's tip points +Z.
     Flap { right: bool },
     /// Rotation about `axis` (part frame) by the channel's value in degrees.
-    Channel {
-        channel: &'static str,
-        axis: Vec3,
-    },
+    Channel { channel: &'static str, axis: Vec3 },
     /// Not animated.
     Static,
 }

@@ -325,19 +325,8 @@ impl CacheWriter for GltfWriter {
                     )
                 };
                 let rec: [f32; RECORD_FLOATS] = [
-                    bee_t.x,
-                    bee_t.y,
-                    bee_t.z,
-                    bee_r.x,
-                    bee_r.y,
-                    bee_r.z,
-                    bee_r.w,
-                    lateral,
-                    body_r.x,
-                    body_r.y,
-                    body_r.z,
-                    body_r.w,
-                    scale,
+                    bee_t.x, bee_t.y, bee_t.z, bee_r.x, bee_r.y, bee_r.z, bee_r.w, lateral,
+                    body_r.x, body_r.y, body_r.z, body_r.w, scale,
                 ];
                 let at = self.record.len();
                 for v in rec.into_iter().chain(driven.clone()) {
@@ -864,9 +853,7 @@ impl Layout {
                     let n = match part.drive {
                         Drive::Attitude => json::Node {
                             translation: Some([0.0, 0.0, f[7]]),
-                            rotation: Some(json::scene::UnitQuaternion([
-                                f[8], f[9], f[10], f[11],
-                            ])),
+                            rotation: Some(json::scene::UnitQuaternion([f[8], f[9], f[10], f[11]])),
                             scale: (f[12] != 1.0).then_some([f[12]; 3]),
                             ..base
                         },

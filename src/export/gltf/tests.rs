@@ -844,17 +844,29 @@ mod articulated {
     fn meshes(length: f32) -> Vec<PartMesh> {
         let thorax = tri(
             length,
-            [Vec3::new(0.2, 0.0, 0.0), Vec3::new(-0.1, 0.0, -0.1), Vec3::new(-0.1, 0.0, 0.1)],
+            [
+                Vec3::new(0.2, 0.0, 0.0),
+                Vec3::new(-0.1, 0.0, -0.1),
+                Vec3::new(-0.1, 0.0, 0.1),
+            ],
         );
         let wing = |side: f32| {
             tri(
                 length,
-                [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.6 * side), Vec3::new(-0.2, 0.0, 0.5 * side)],
+                [
+                    Vec3::ZERO,
+                    Vec3::new(0.1, 0.0, 0.6 * side),
+                    Vec3::new(-0.2, 0.0, 0.5 * side),
+                ],
             )
         };
         let abdomen = tri(
             length,
-            [Vec3::ZERO, Vec3::new(-0.5, 0.0, -0.05), Vec3::new(-0.5, 0.0, 0.05)],
+            [
+                Vec3::ZERO,
+                Vec3::new(-0.5, 0.0, -0.05),
+                Vec3::new(-0.5, 0.0, 0.05),
+            ],
         );
         vec![
             PartMesh {
@@ -906,7 +918,9 @@ fn moth_frames(m: &CacheMeta, f: i32) -> Vec<SwarmFrame> {
             let n = s.len();
             s.channels = vec![
                 (0..n).map(|i| 60.0 * (9.0 * t + i as f32).sin()).collect(),
-                (0..n).map(|i| -20.0 + 25.0 * (2.0 * t + i as f32).cos()).collect(),
+                (0..n)
+                    .map(|i| -20.0 + 25.0 * (2.0 * t + i as f32).cos())
+                    .collect(),
             ];
         }
     }

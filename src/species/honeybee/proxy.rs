@@ -146,7 +146,10 @@ mod tests {
     #[test]
     fn wings_span_z_and_face_up() {
         let (r, l) = (wing(0.012, true), wing(0.012, false));
-        assert!(r.extent()[1].z > 0.009 && l.extent()[0].z < -0.009, "span about 19 mm");
+        assert!(
+            r.extent()[1].z > 0.009 && l.extent()[0].z < -0.009,
+            "span about 19 mm"
+        );
         for m in [&r, &l] {
             assert!(m.extent()[0].y > 0.0, "above the body axis");
             for f in faces(m) {
