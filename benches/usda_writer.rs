@@ -54,9 +54,8 @@ fn main() {
                 orientation,
                 angular_velocity_deg,
                 scale: take(1).to_vec(),
-                pitch_deg: take(1).to_vec(),
-                roll_deg: take(1).to_vec(),
-                sway_m: take(1).to_vec(),
+                // pitch, roll, sway
+                channels: (0..3).map(|_| take(1).to_vec()).collect(),
             }
         })
         .collect();
@@ -70,7 +69,9 @@ fn main() {
         swarms: vec![SwarmMeta {
             name: "bees".into(),
             count: n,
-            bee_length_m: 0.012,
+            species: &beeswarm::species::HONEYBEE,
+            channels: beeswarm::species::BEE_CHANNELS.to_vec(),
+            body_length_m: 0.012,
             wing_beat_hz: 230.0,
         }],
     };

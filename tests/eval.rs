@@ -352,3 +352,36 @@ fn plot_writes_a_valid_deterministic_png() {
     // Only the PNG is left: the temporary file was renamed.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 }
+
+#[test]
+fn a_shot_mixing_models_bakes_empty_channel_cells_that_eval_reads() {
+    // Bees record pitch, roll and sway; curl agents record none.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("mix.toml"),
+        "[scene]\nframes = [1, 12]\n[[swarm]]\nname = \"bees\"\ncount = 4\n[[swarm]]\nname = \"drift\"\nmodel = \"curl\"\ncount = 3\n",
+    )
+    .unwrap();
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args(["bake", "mix.toml", "--format", "csv", "--out", "out"])
+        .current_dir(dir.path())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let path = dir.path().join("out/mix.tracks.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), beeswarm::export::csv::HEADER);
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 7 * 12);
+    // Ids 0–3 are bees (every cell filled), 4–6 curl agents (the three channels empty).
+    for row in &rows {
+        let cells: Vec<&str> = row.split(',').collect();
+        let id: u64 = cells[0].parse().unwrap();
+        let empty = cells[13..].iter().filter(|c| c.is_empty()).count();
+        assert_eq!(empty, if id < 4 { 0 } else { 3 }, "{row}");
+    }
+    let ds = beeswarm::eval::tracks::read(&path).unwrap();
+    assert_eq!(ds.tracks.len(), 7);
+    assert!(ds.tracks.iter().all(|t| t.position.len() == 12));
+}

@@ -22,9 +22,13 @@ fn lone_bee(obstacles: &str, frames: u32) -> Simulation {
 /// Roll (degrees) and z position per frame of the lone bee.
 fn roll_and_z(obstacles: &str, frames: u32) -> Vec<(f32, f32, f32)> {
     let mut out = Vec::new();
-    run_with(lone_bee(obstacles, frames), |sim| {
+    let sim = lone_bee(obstacles, frames);
+    let roll = sim.meta().swarms[0]
+        .channel("roll")
+        .expect("a roll channel");
+    run_with(sim, |sim| {
         let s = &sim.record()[0];
-        out.push((s.position[0].x, s.roll_deg[0], s.position[0].z));
+        out.push((s.position[0].x, s.channels[roll][0], s.position[0].z));
     });
     out
 }
@@ -169,10 +173,13 @@ fn a_swarm_passing_a_row_of_shafts_has_zero_penetrations() {
     let r = sh.swarms[0].bee.radius;
     let mut penetrations = 0;
     let mut rolled = 0;
-    let frames = run_with(Simulation::new(&sh), |sim| {
+    let sim = Simulation::new(&sh);
+    let roll = sim.meta().swarms[0]
+        .channel("roll")
+        .expect("a roll channel");
+    let frames = run_with(sim, |sim| {
         assert_all_finite(sim);
-        rolled += sim.record()[0]
-            .roll_deg
+        rolled += sim.record()[0].channels[roll]
             .iter()
             .filter(|r| r.abs() > 25.0)
             .count();

@@ -7,9 +7,12 @@
 //!     /<swarm>                     PointInstancer: ids, protoIndices, prototypes, and
 //!                                  time-sampled positions, orientations (quath), scales,
 //!                                  velocities (m/s), angularVelocities (deg/s), extent,
-//!                                  primvars:pitch / roll / sway ("vertex": per instance)
-//!         /Prototypes/bee          Scope / Xform
-//!             /body, /wings        Mesh, real size in metres, body along +X
+//!                                  and one primvars:<channel> per channel the model
+//!                                  records ("vertex": per instance; a honeybee: pitch,
+//!                                  roll, sway)
+//!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee)
+//!             /<part>              Mesh per part of the species (body, wing_l, wing_r),
+//!                                  real size in metres, body along +X
 //! ```
 //!
 //! USDA stores the time samples of one attribute as one block, but frames arrive one at a
@@ -26,13 +29,13 @@
 //! Every file is committed only when the whole bake succeeded: a failed or interrupted
 //! bake leaves the previous cache in place and no temporary file behind.
 
-mod bee;
 mod text;
 
 use super::CacheWriter;
 use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
-use crate::sim::{CacheMeta, Frame, SwarmFrame};
+use crate::sim::{CacheMeta, Frame, SwarmFrame, SwarmMeta};
+use crate::species::{PolyMesh, ProxyMesh};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -45,7 +48,8 @@ use text::{HalfFormatter, push_f32};
 /// small enough that one big swarm still spreads over every core.
 const PIECE: usize = 8192;
 
-/// The time-sampled attributes of each instancer, in the order they are written.
+/// The time-sampled attributes of each instancer, in the order they are written: the
+/// fixed ones, then one primvar per channel of the swarm's model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Attr {
     Positions,
@@ -54,52 +58,50 @@ enum Attr {
     Velocities,
     AngularVelocities,
     Extent,
-    Pitch,
-    Roll,
-    Sway,
+    /// `primvars:<name>` of the swarm's channel with this index.
+    Primvar(usize),
 }
 
-const ATTRS: [Attr; 9] = [
+const FIXED_ATTRS: [Attr; 6] = [
     Attr::Positions,
     Attr::Orientations,
     Attr::Scales,
     Attr::Velocities,
     Attr::AngularVelocities,
     Attr::Extent,
-    Attr::Pitch,
-    Attr::Roll,
-    Attr::Sway,
 ];
+
+/// Every time-sampled attribute of a swarm's instancer, in order.
+fn attrs(m: &SwarmMeta) -> impl Iterator<Item = Attr> + '_ {
+    FIXED_ATTRS
+        .into_iter()
+        .chain((0..m.channels.len()).map(Attr::Primvar))
+}
 
 impl Attr {
     /// Type and name, as declared in the layer.
-    fn decl(self) -> &'static str {
+    fn decl(self, m: &SwarmMeta) -> String {
         match self {
-            Attr::Positions => "point3f[] positions",
-            Attr::Orientations => "quath[] orientations",
-            Attr::Scales => "float3[] scales",
-            Attr::Velocities => "vector3f[] velocities",
-            Attr::AngularVelocities => "vector3f[] angularVelocities",
-            Attr::Extent => "float3[] extent",
-            Attr::Pitch => "float[] primvars:pitch",
-            Attr::Roll => "float[] primvars:roll",
-            Attr::Sway => "float[] primvars:sway",
+            Attr::Positions => "point3f[] positions".into(),
+            Attr::Orientations => "quath[] orientations".into(),
+            Attr::Scales => "float3[] scales".into(),
+            Attr::Velocities => "vector3f[] velocities".into(),
+            Attr::AngularVelocities => "vector3f[] angularVelocities".into(),
+            Attr::Extent => "float3[] extent".into(),
+            Attr::Primvar(c) => format!("float[] primvars:{}", m.channels[c].name),
         }
     }
 
-    fn name(self) -> &'static str {
-        self.decl().split(' ').nth(1).expect("type then name")
+    fn name(self, m: &SwarmMeta) -> String {
+        let decl = self.decl(m);
+        decl.split(' ').nth(1).expect("type then name").to_owned()
     }
 
     /// Our primvars are per instance. On a PointInstancer, "vertex" (like "varying")
     /// assigns element i to instance i; "vertex" is what DCCs write and read back.
-    fn primvar_doc(self) -> Option<&'static str> {
+    fn primvar_doc(self, m: &SwarmMeta) -> Option<&'static str> {
         match self {
-            Attr::Pitch => Some("Body pitch, degrees, nose up positive (about body +Z)."),
-            Attr::Roll => Some("Body roll, degrees, right wing down positive (about body +X)."),
-            Attr::Sway => {
-                Some("Lateral offset from the mean path, metres, along the heading's +Z.")
-            }
+            Attr::Primvar(c) => Some(m.channels[c].doc),
             _ => None,
         }
     }
@@ -112,7 +114,7 @@ impl Attr {
             }
             Attr::Orientations => 4 * 11 + 8,
             Attr::Extent => 0,
-            Attr::Pitch | Attr::Roll | Attr::Sway => 16 + 2,
+            Attr::Primvar(_) => 16 + 2,
         }
     }
 }
@@ -207,9 +209,7 @@ impl Piece {
                 }
                 bad
             }
-            Attr::Pitch => floats(out, &s.pitch_deg[r.clone()]),
-            Attr::Roll => floats(out, &s.roll_deg[r.clone()]),
-            Attr::Sway => floats(out, &s.sway_m[r.clone()]),
+            Attr::Primvar(c) => floats(out, &s.channels[c][r.clone()]),
             Attr::Extent => {
                 // A bound of every instance under any rotation: the prototype's bound
                 // radius times the instance's scale around its position. Conservative,
@@ -259,7 +259,7 @@ struct Spill {
 /// The samples of the frames `start..` not yet written into a layer.
 struct Chunk {
     start: i32,
-    /// Index `swarm * ATTRS.len() + attribute`.
+    /// Index `UsdaWriter::first_spill[swarm] + attribute`.
     spills: Vec<Spill>,
 }
 
@@ -284,6 +284,10 @@ pub struct UsdaWriter {
     /// of one prototype at scale 1.
     ids: Vec<Vec<u64>>,
     radius: Vec<f32>,
+    /// Per swarm: the prototype geometry of its species, one mesh per part.
+    proxies: Vec<Vec<ProxyMesh>>,
+    /// Per swarm: the index of its first attribute's spill in a chunk.
+    first_spill: Vec<usize>,
     pieces: Vec<Piece>,
     half: HalfFormatter,
     next_frame: i32,
@@ -302,11 +306,29 @@ impl UsdaWriter {
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or(Path::new("."))
             .to_path_buf();
-        let radius = meta
+        let proxies: Vec<Vec<ProxyMesh>> = meta
             .swarms
             .iter()
-            .map(|s| bee::bound_radius(s.bee_length_m))
+            .map(|s| (s.species.proxies)(s.body_length_m))
             .collect();
+        for (s, p) in meta.swarms.iter().zip(&proxies) {
+            assert_eq!(
+                p.len(),
+                s.species.parts.len(),
+                "species {}: one prototype mesh per part",
+                s.species.name
+            );
+        }
+        let radius = proxies
+            .iter()
+            .map(|p| crate::species::bound_radius(p))
+            .collect();
+        let mut first_spill = Vec::new();
+        let mut spills = 0;
+        for s in &meta.swarms {
+            first_spill.push(spills);
+            spills += attrs(s).count();
+        }
         let clips_dir = dir.join(format!("{}.clips", meta.shot_name));
         let mut created_clips_dir = false;
         if clip_frames > 0 && !clips_dir.is_dir() {
@@ -323,6 +345,8 @@ impl UsdaWriter {
             created_clips_dir,
             ids: Vec::new(),
             radius,
+            proxies,
+            first_spill,
             pieces: Vec::new(),
             half: HalfFormatter::new(),
             next_frame: meta.frame_start,
@@ -341,17 +365,21 @@ impl UsdaWriter {
                 s.position.len(),
                 s.velocity.len(),
                 s.orientation.len(),
-                s.pitch_deg.len(),
-                s.roll_deg.len(),
-                s.sway_m.len(),
                 s.angular_velocity_deg.len(),
                 s.scale.len(),
             ];
-            if n != m.count || lens.iter().any(|&l| l != n) {
+            let channels_ok =
+                s.channels.len() == m.channels.len() && s.channels.iter().all(|c| c.len() == n);
+            if n != m.count || lens.iter().any(|&l| l != n) || !channels_ok {
                 return Err(Error::bake(format!(
                     "USDA writer: swarm \"{}\" at frame {} has {n} ids and per-bee arrays of \
-                     {lens:?}; expected {} bees (instance count is constant through a shot)",
-                    m.name, frame.frame, m.count
+                     {lens:?} and {} channel columns; expected {} bees and {} channels \
+                     (instance count is constant through a shot)",
+                    m.name,
+                    frame.frame,
+                    s.channels.len(),
+                    m.count,
+                    m.channels.len()
                 )));
             }
             match self.ids.get(k) {
@@ -371,7 +399,7 @@ impl UsdaWriter {
     /// The formatting tasks, fixed for the shot since counts are constant.
     fn plan_pieces(&mut self) {
         for (k, m) in self.meta.swarms.iter().enumerate() {
-            for attr in ATTRS {
+            for attr in attrs(m) {
                 let ranges: Vec<(usize, usize)> = if attr == Attr::Extent || m.count == 0 {
                     vec![(0, m.count)]
                 } else {
@@ -397,10 +425,10 @@ impl UsdaWriter {
     fn new_chunk(&self, start: i32) -> Result<Chunk> {
         let mut spills = Vec::new();
         for m in &self.meta.swarms {
-            for attr in ATTRS {
+            for attr in attrs(m) {
                 let scratch = ScratchFile::new(
                     &self.dir,
-                    &format!("usda.{}.{}", m.name, attr.name().replace(':', "_")),
+                    &format!("usda.{}.{}", m.name, attr.name(m).replace(':', "_")),
                 );
                 let f = File::create(&scratch.path).map_err(io(&scratch.path))?;
                 spills.push(Spill {
@@ -448,11 +476,12 @@ impl UsdaWriter {
         out: &mut BufWriter<File>,
         out_path: &Path,
     ) -> Result<()> {
-        for (a, attr) in ATTRS.iter().enumerate() {
-            let spill = &mut chunk.spills[swarm * ATTRS.len() + a];
+        let m = &self.meta.swarms[swarm];
+        for (a, attr) in attrs(m).enumerate() {
+            let spill = &mut chunk.spills[self.first_spill[swarm] + a];
             spill.w.flush().map_err(io(&spill.scratch.path))?;
             let mut src = File::open(&spill.scratch.path).map_err(io(&spill.scratch.path))?;
-            writeln!(out, "        {}.timeSamples = {{", attr.decl()).map_err(io(out_path))?;
+            writeln!(out, "        {}.timeSamples = {{", attr.decl(m)).map_err(io(out_path))?;
             std::io::copy(&mut src, out).map_err(io(out_path))?;
             out.write_all(b"        }\n").map_err(io(out_path))?;
         }
@@ -551,23 +580,29 @@ impl UsdaWriter {
         t.extend_from_slice(b"]\n");
         let _ = writeln!(
             Wrap(&mut t),
-            "        rel prototypes = </{}/{}/Prototypes/bee>",
+            "        rel prototypes = </{}/{}/Prototypes/{}>",
             self.root,
-            m.name
+            m.name,
+            m.species.name
         );
         out.write_all(&t).map_err(io(path))
     }
 
-    /// The prototype subtree of one instancer.
+    /// The prototype subtree of one instancer: `Prototypes/<species>/<part>`.
     fn prototypes(&self, swarm: usize) -> String {
-        let m = &self.meta.swarms[swarm];
+        let sp = self.meta.swarms[swarm].species;
         let mut s = String::new();
-        s.push_str("\n        def Scope \"Prototypes\"\n        {\n            def Xform \"bee\"\n            {\n");
-        let body = bee::body(m.bee_length_m);
-        let wings = bee::wings(m.bee_length_m);
-        mesh_text(&mut s, "body", &body, "(0.55, 0.36, 0.08)", None);
-        s.push('\n');
-        mesh_text(&mut s, "wings", &wings, "(0.86, 0.88, 0.9)", Some("0.35"));
+        let _ = write!(
+            s,
+            "\n        def Scope \"Prototypes\"\n        {{\n            def Xform \"{}\"\n            {{\n",
+            sp.name
+        );
+        for (k, (part, proxy)) in sp.parts.iter().zip(&self.proxies[swarm]).enumerate() {
+            if k > 0 {
+                s.push('\n');
+            }
+            mesh_text(&mut s, part.name, proxy);
+        }
         s.push_str("            }\n        }\n");
         s
     }
@@ -579,7 +614,7 @@ impl UsdaWriter {
             "    def PointInstancer \"{}\" (\n        customData = {{\n            float beeLength = {}\n            \
              float wingBeatHz = {}\n        }}\n    )\n    {{\n",
             m.name,
-            f32_text(m.bee_length_m),
+            f32_text(m.body_length_m),
             f32_text(m.wing_beat_hz)
         )
     }
@@ -602,12 +637,13 @@ impl UsdaWriter {
             out.write_all(self.instancer_open(k).as_bytes())
                 .map_err(io(&path))?;
             self.write_static(k, out, &path)?;
-            for attr in ATTRS {
-                if let Some(doc) = attr.primvar_doc() {
+            let m = &self.meta.swarms[k];
+            for attr in attrs(m) {
+                if let Some(doc) = attr.primvar_doc(m) {
                     write!(
                         out,
                         "        {} (\n{}        )\n",
-                        attr.decl(),
+                        attr.decl(m),
                         primvar_meta(doc)
                     )
                     .map_err(io(&path))?;
@@ -650,8 +686,8 @@ impl UsdaWriter {
         );
         for m in &self.meta.swarms {
             let _ = write!(t, "    over \"{}\"\n    {{\n", m.name);
-            for attr in ATTRS {
-                let _ = writeln!(t, "        {}", attr.decl());
+            for attr in attrs(m) {
+                let _ = writeln!(t, "        {}", attr.decl(m));
             }
             t.push_str("    }\n");
         }
@@ -698,15 +734,16 @@ impl UsdaWriter {
             self.write_static(k, out, &path)?;
             // Declared here so the composed stage knows their types; values come from
             // the clips.
-            for attr in ATTRS {
-                match attr.primvar_doc() {
+            let m = &self.meta.swarms[k];
+            for attr in attrs(m) {
+                match attr.primvar_doc(m) {
                     Some(doc) => write!(
                         out,
                         "        {} (\n{}        )\n",
-                        attr.decl(),
+                        attr.decl(m),
                         primvar_meta(doc)
                     ),
-                    None => writeln!(out, "        {}", attr.decl()),
+                    None => writeln!(out, "        {}", attr.decl(m)),
                 }
                 .map_err(io(&path))?;
             }
@@ -793,7 +830,15 @@ fn stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) -> Vec<PathBuf> {
 }
 
 /// One mesh prim of the prototype.
-fn mesh_text(s: &mut String, name: &str, m: &bee::Mesh, color: &str, opacity: Option<&str>) {
+fn mesh_text(s: &mut String, name: &str, proxy: &ProxyMesh) {
+    let m: &PolyMesh = &proxy.mesh;
+    let color = {
+        let mut t = Vec::new();
+        let [r, g, b] = proxy.color;
+        push_vec3(&mut t, Vec3::new(r, g, b));
+        String::from_utf8(t).expect("ASCII")
+    };
+    let opacity = proxy.opacity.map(f32_text);
     let ind = "                    ";
     let vec3_list = |vs: &[Vec3]| {
         let mut t = Vec::new();
@@ -860,9 +905,9 @@ impl CacheWriter for UsdaWriter {
                 self.meta.swarms[p.swarm].name,
                 frame.swarms[p.swarm].ids[i],
                 if p.attr == Attr::Extent {
-                    "position"
+                    "position".to_owned()
                 } else {
-                    p.attr.name()
+                    p.attr.name(&self.meta.swarms[p.swarm])
                 },
                 frame.frame
             )));
@@ -927,7 +972,9 @@ mod tests {
                 .map(|(k, &count)| SwarmMeta {
                     name: format!("swarm{k}"),
                     count,
-                    bee_length_m: 0.012,
+                    species: &crate::species::HONEYBEE,
+                    channels: crate::species::BEE_CHANNELS.to_vec(),
+                    body_length_m: 0.012,
                     wing_beat_hz: 230.0,
                 })
                 .collect(),
@@ -937,7 +984,10 @@ mod tests {
     /// Deterministic, varied values: negative, tiny, integral, zero.
     fn swarm_frame(count: usize, frame: i32, first_id: u64) -> SwarmFrame {
         let t = frame as f32 * 0.1;
-        let mut s = SwarmFrame::default();
+        let mut s = SwarmFrame {
+            channels: vec![Vec::new(); 3],
+            ..Default::default()
+        };
         for i in 0..count {
             let a = i as f32 * 0.37 + t;
             s.ids.push(first_id + i as u64);
@@ -947,9 +997,9 @@ mod tests {
             let q = Quat::from_rotation_y(a) * Quat::from_rotation_z(0.3 * a.sin());
             s.orientation.push(q);
             s.heading.push(Quat::from_rotation_y(a));
-            s.pitch_deg.push(17.19 * a.sin());
-            s.roll_deg.push(-3.0);
-            s.sway_m.push(1e-7 * i as f32);
+            s.channels[0].push(17.19 * a.sin());
+            s.channels[1].push(-3.0);
+            s.channels[2].push(1e-7 * i as f32);
             s.angular_velocity_deg.push(Vec3::new(0.0, 57.3, 1.5));
             s.scale.push(1.0 + 0.01 * i as f32);
         }
@@ -1031,16 +1081,26 @@ mod tests {
             "int64[] ids = [1100, 1101, 1102]\n",
             "int64[] ids = [2100, 2101]\n",
             "int[] protoIndices = [0, 0, 0]\n",
-            "rel prototypes = </test_shot/swarm0/Prototypes/bee>",
+            "rel prototypes = </test_shot/swarm0/Prototypes/honeybee>",
             "float[] primvars:pitch (\n",
+            "float[] primvars:roll (\n",
+            "float[] primvars:sway (\n",
+            "doc = \"Body pitch, degrees, nose up positive (about body +Z).\"",
             "interpolation = \"vertex\"",
+            "def Xform \"honeybee\"",
             "def Mesh \"body\"",
-            "def Mesh \"wings\"",
+            "def Mesh \"wing_l\"",
+            "def Mesh \"wing_r\"",
+            "color3f[] primvars:displayColor = [(0.55, 0.36, 0.08)]",
+            "float[] primvars:displayOpacity = [0.35]",
         ] {
             assert!(t.contains(needle), "missing {needle:?}");
         }
-        for attr in ATTRS {
-            let block = format!("        {}.timeSamples = {{\n            1: [", attr.decl());
+        for attr in attrs(&m.swarms[0]) {
+            let block = format!(
+                "        {}.timeSamples = {{\n            1: [",
+                attr.decl(&m.swarms[0])
+            );
             assert_eq!(
                 t.matches(&block).count(),
                 2,
@@ -1228,7 +1288,7 @@ mod tests {
         bake(single.path(), &m, 0).unwrap();
         let whole = std::fs::read_to_string(single.path().join("test-shot.usda")).unwrap();
         let sample = |t: &str, attr: Attr, nth: usize, f: i32| -> String {
-            let head = format!("{}.timeSamples = {{\n", attr.decl());
+            let head = format!("{}.timeSamples = {{\n", attr.decl(&m.swarms[0]));
             let at = t.match_indices(&head).nth(nth).unwrap().0;
             let line = format!("            {f}: [");
             let from = at + t[at..].find(&line).unwrap();
@@ -1241,7 +1301,7 @@ mod tests {
             )
             .unwrap()
         };
-        for attr in ATTRS {
+        for attr in attrs(&m.swarms[0]) {
             for (n, frames) in [(1, 1..=5), (2, 5..=9), (3, 9..=10)] {
                 let c = clip(n);
                 for f in frames {

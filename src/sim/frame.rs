@@ -2,36 +2,36 @@
 //!
 //! Conventions (every field): metres, seconds, Y-up right-handed world; body frame X forward
 //! (thrust), Y up (lift), Z right (sway). Quaternions are glam's `Quat`, component order
-//! (x, y, z, w), rotating body → world. Angles stored as scalars are degrees.
+//! (x, y, z, w), rotating body → world. What else a model records per agent (a honeybee:
+//! pitch, roll, sway) is a list of named channels described by `SwarmMeta::channels`, and
+//! how the agents are drawn is `SwarmMeta::species`.
 
+use crate::species::{Channel, Species};
 use glam::{Quat, Vec3};
 
-/// One swarm's state at one recorded frame. Every vector has one entry per bee, in the
+/// One swarm's state at one recorded frame. Every vector has one entry per agent, in the
 /// same order in every frame (the order of `ids`).
 #[derive(Clone, Debug, Default)]
 pub struct SwarmFrame {
-    /// Stable bee ids, unique across the whole shot and constant through it.
+    /// Stable agent ids, unique across the whole shot and constant through it.
     pub ids: Vec<u64>,
     /// Position of the body's centre of mass, metres.
     pub position: Vec<Vec3>,
     /// Velocity, metres per second.
     pub velocity: Vec<Vec3>,
-    /// Full body orientation (heading, then pitch, then roll), body → world.
+    /// Full body orientation, body → world.
     pub orientation: Vec<Quat>,
     /// Heading only: rotation about world +Y that turns body +X onto the horizontal
-    /// direction of travel. `orientation = heading * Rz(pitch) * Rx(roll)`.
+    /// direction of travel; `heading⁻¹ · orientation` is the body's attitude (a honeybee:
+    /// `Rz(pitch) · Rx(roll)`).
     pub heading: Vec<Quat>,
-    /// Body pitch, degrees, nose up positive (rotation about body +Z).
-    pub pitch_deg: Vec<f32>,
-    /// Body roll, degrees, right wing down positive (rotation about body +X).
-    pub roll_deg: Vec<f32>,
-    /// Sway: lateral offset of the body from its mean path, metres, along the heading
-    /// frame's +Z (right). See docs/model.md.
-    pub sway_m: Vec<f32>,
     /// Angular velocity of the body, degrees per second, world frame.
     pub angular_velocity_deg: Vec<Vec3>,
-    /// Uniform scale of the bee prototype (1 = the swarm's nominal bee length).
+    /// Uniform scale of the prototype (1 = the swarm's nominal body length).
     pub scale: Vec<f32>,
+    /// The model's channels: one column per entry of `SwarmMeta::channels`, in that order,
+    /// each with one value per agent, in the channel's unit.
+    pub channels: Vec<Vec<f32>>,
 }
 
 impl SwarmFrame {
@@ -40,6 +40,11 @@ impl SwarmFrame {
     }
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
+    }
+
+    /// Agent `i`'s value of channel column `column` (`None`: 0), e.g. the lateral offset.
+    pub fn channel_or_zero(&self, column: Option<usize>, i: usize) -> f32 {
+        column.map_or(0.0, |c| self.channels[c][i])
     }
 }
 
@@ -74,13 +79,31 @@ impl CacheMeta {
     }
 }
 
+/// Static facts about one swarm.
 #[derive(Clone, Debug)]
 pub struct SwarmMeta {
     /// Unique, identifier-safe name (`[A-Za-z_][A-Za-z0-9_]*`).
     pub name: String,
     pub count: usize,
-    /// Nominal body length of a bee of scale 1, metres (a honeybee: 0.012).
-    pub bee_length_m: f32,
+    /// How the agents are drawn (parts, meshes, what drives each part).
+    pub species: &'static Species,
+    /// What the model records per agent each frame, the order of `SwarmFrame::channels`.
+    pub channels: Vec<Channel>,
+    /// Nominal body length of an agent of scale 1, metres (a honeybee: 0.012).
+    pub body_length_m: f32,
     /// Wing beat frequency of the real insect, Hz (a honeybee: about 230).
     pub wing_beat_hz: f32,
+}
+
+impl SwarmMeta {
+    /// The column of `SwarmFrame::channels` holding the channel called `name`.
+    pub fn channel(&self, name: &str) -> Option<usize> {
+        self.channels.iter().position(|c| c.name == name)
+    }
+
+    /// The column holding the body's lateral offset (`species.lateral_offset`), if the
+    /// swarm records it.
+    pub fn lateral_offset(&self) -> Option<usize> {
+        self.species.lateral_offset.and_then(|n| self.channel(n))
+    }
 }

@@ -23,8 +23,6 @@ struct Runner<M: Model> {
     next: Vec<M::Agent>,
     /// Global index of the first agent.
     start: usize,
-    /// Channel values of the current frame, one column per channel of the model.
-    channels: Vec<Vec<f32>>,
 }
 
 /// What the world does with a swarm, whatever its model: one call per swarm per pass.
@@ -136,10 +134,6 @@ impl<M: Model> Swarm for Runner<M> {
     fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32) {
         let n = self.agents.len();
         let channels = M::INFO.channels.len();
-        self.channels.resize_with(channels, Vec::new);
-        for c in &mut self.channels {
-            c.clear();
-        }
         f.ids.clear();
         f.ids.extend((0..n as u64).map(|k| first_id + k));
         f.position.clear();
@@ -148,6 +142,10 @@ impl<M: Model> Swarm for Runner<M> {
         f.heading.clear();
         f.angular_velocity_deg.clear();
         f.scale.clear();
+        f.channels.resize_with(channels, Vec::new);
+        for c in &mut f.channels {
+            c.clear();
+        }
         let mut values = vec![0.0f32; channels];
         for a in &self.agents {
             let pose = self.model.pose(a, dt);
@@ -158,23 +156,10 @@ impl<M: Model> Swarm for Runner<M> {
             f.angular_velocity_deg.push(pose.angular_velocity_deg);
             f.scale.push(a.size());
             self.model.record(a, &pose, &mut values);
-            for (c, v) in self.channels.iter_mut().zip(&values) {
+            for (c, v) in f.channels.iter_mut().zip(&values) {
                 c.push(*v);
             }
         }
-        // The frame's bee attitude columns (pitch, roll, sway) from the channels of those
-        // names, zero for models that do not record them.
-        let column = |name: &str| {
-            M::INFO
-                .channels
-                .iter()
-                .position(|c| c.name == name)
-                .map(|k| self.channels[k].clone())
-                .unwrap_or_else(|| vec![0.0; n])
-        };
-        f.pitch_deg = column("pitch");
-        f.roll_deg = column("roll");
-        f.sway_m = column("sway");
     }
 }
 
@@ -287,7 +272,6 @@ impl Simulation {
                     next: Vec::with_capacity(agents.len()),
                     agents,
                     start: first,
-                    channels: Vec::new(),
                 })
             }));
             first += s.count;
@@ -393,11 +377,16 @@ impl Simulation {
                 .shot
                 .swarms
                 .iter()
-                .map(|s| SwarmMeta {
-                    name: s.name.clone(),
-                    count: s.count,
-                    bee_length_m: s.bee.length,
-                    wing_beat_hz: s.bee.wing_beat_hz,
+                .map(|s| {
+                    let info = s.model.info();
+                    SwarmMeta {
+                        name: s.name.clone(),
+                        count: s.count,
+                        species: info.species,
+                        channels: info.channels.to_vec(),
+                        body_length_m: s.bee.length,
+                        wing_beat_hz: s.bee.wing_beat_hz,
+                    }
                 })
                 .collect(),
         }

@@ -51,7 +51,9 @@ pub fn assert_all_finite(sim: &Simulation) {
                 s.ids[i]
             );
             assert!(
-                s.pitch_deg[i].is_finite() && s.roll_deg[i].is_finite() && s.sway_m[i].is_finite()
+                s.channels.iter().all(|c| c[i].is_finite()),
+                "bee {} channels",
+                s.ids[i]
             );
             assert!(s.angular_velocity_deg[i].is_finite() && s.scale[i].is_finite());
         }

@@ -83,7 +83,7 @@ def usda(name, swarm, fps, f0, f1, n, frames):
         '    upAxis = "Y"', f"    timeCodesPerSecond = {fps}", f"    framesPerSecond = {fps}",
         f"    startTimeCode = {f0}", f"    endTimeCode = {f1}", ")", "",
         f'def Xform "{name}"', "{", f'    def PointInstancer "{swarm}"', "    {",
-        f"        rel prototypes = [</{name}/{swarm}/Prototypes/bee>]",
+        f"        rel prototypes = [</{name}/{swarm}/Prototypes/honeybee>]",
         "        int[] protoIndices = [" + ", ".join("0" * 1 for _ in range(n)) + "]",
         "        int64[] ids = [" + ", ".join(str(i) for i in range(n)) + "]",
         "        point3f[] positions.timeSamples = {",
@@ -93,7 +93,7 @@ def usda(name, swarm, fps, f0, f1, n, frames):
     lines += [f"            {f}: {arr(v for _, v in rows)}," for f, rows in frames.items()]
     lines += ["        }",
               "        quath[] orientations = [" + ", ".join("(1, 0, 0, 0)" for _ in range(n)) + "]",
-              '        def Scope "Prototypes"', "        {", '            def Cube "bee"',
+              '        def Scope "Prototypes"', "        {", '            def Cube "honeybee"',
               "            {", "                double size = 0.012", "            }", "        }",
               "    }", "}", ""]
     return "\n".join(lines)

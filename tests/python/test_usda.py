@@ -117,6 +117,7 @@ def test_one_instancer_per_swarm_with_constant_instances(baked, mode):
         assert list(pi.GetProtoIndicesAttr().Get()) == [0] * count
         (proto,) = pi.GetPrototypesRel().GetTargets()
         assert proto.HasPrefix(pi.GetPath())
+        assert proto == pi.GetPath().AppendPath("Prototypes/honeybee")
         for attr in (pi.GetPositionsAttr(), pi.GetOrientationsAttr(), pi.GetScalesAttr(),
                      pi.GetVelocitiesAttr(), pi.GetAngularVelocitiesAttr()):
             assert attr.GetTimeSamples() == list(range(FIRST, LAST + 1)), attr.GetName()
@@ -133,15 +134,20 @@ def test_prototype_is_a_bee_at_real_scale(baked):
     stage = open_stage(baked["single"])
     pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/usda_test/workers"))
     (proto,) = pi.GetPrototypesRel().GetTargets()
+    assert proto.name == "honeybee"
+    assert [c.GetName() for c in stage.GetPrimAtPath(proto).GetChildren()] == ["body", "wing_l", "wing_r"]
     body = UsdGeom.Mesh(stage.GetPrimAtPath(proto.AppendChild("body")))
-    wings = UsdGeom.Mesh(stage.GetPrimAtPath(proto.AppendChild("wings")))
+    wing_l = UsdGeom.Mesh(stage.GetPrimAtPath(proto.AppendChild("wing_l")))
+    wing_r = UsdGeom.Mesh(stage.GetPrimAtPath(proto.AppendChild("wing_r")))
     lo, hi = (np.array(v) for v in body.GetExtentAttr().Get())
     size = hi - lo
     assert size[0] == pytest.approx(0.012, rel=1e-4), "12 mm long, along +X"
     assert size[1] < 0.005 and size[2] < 0.005
-    lo, hi = (np.array(v) for v in wings.GetExtentAttr().Get())
-    assert hi[2] > 0.008 and lo[2] < -0.008, "wings span ±Z"
-    for mesh in (body, wings):
+    lo, hi = (np.array(v) for v in wing_r.GetExtentAttr().Get())
+    assert hi[2] > 0.008 and lo[2] > 0, "the right wing spans +Z"
+    lo, hi = (np.array(v) for v in wing_l.GetExtentAttr().Get())
+    assert lo[2] < -0.008 and hi[2] < 0, "the left wing spans -Z"
+    for mesh in (body, wing_l, wing_r):
         pts = np.array(mesh.GetPointsAttr().Get())
         assert np.allclose(UsdGeom.Boundable.ComputeExtentFromPlugins(mesh, 0), mesh.GetExtentAttr().Get())
         assert pts.shape[0] == max(mesh.GetFaceVertexIndicesAttr().Get()) + 1

@@ -1,19 +1,23 @@
 //! glTF 2.0 cache: `.glb`, or `.gltf` with its `.bin` beside it.
 //!
-//! Scene: one root node per swarm (named after it), one node per bee under it. Per bee:
+//! Scene: one root node per swarm (named after it), one node per agent under it, and under
+//! that one node per part of the swarm's species (`species::Species`), named
+//! `<agent>_<part>`. For the honeybee:
 //!
 //! ```text
 //! bee_000123            translation = position − heading·(0,0,sway), rotation = heading
 //! └─ bee_000123_body    translation = (0,0,sway), rotation = Rz(pitch)·Rx(roll), scale,
-//!    │                  mesh = the striped body
+//!    │                  mesh = the striped body                          (Drive::Attitude)
 //!    ├─ bee_000123_wing_l   hinge on the thorax, flapping rotation (or a static blur pose)
-//!    └─ bee_000123_wing_r
+//!    └─ bee_000123_wing_r                                                (Drive::Flap)
 //! ```
 //!
-//! so an animator reads the path on the bee node and the body motion on its child, and the
-//! body node's world transform is exactly the simulated pose (its world position is the
-//! tracks CSV position). Every track is LINEAR and keyed once per frame on one shared time
-//! accessor, `(frame − start) / fps` seconds.
+//! so an animator reads the path on the agent node and the body motion on its child, and
+//! the body node's world transform is exactly the simulated pose (its world position is
+//! the tracks CSV position). The lateral offset (sway) is the channel the species names in
+//! `lateral_offset`; a part with `Drive::Channel` gets a rotation track turning it about
+//! its axis by the channel's value in degrees. Every track is LINEAR and keyed once per
+//! frame on one shared time accessor, `(frame − start) / fps` seconds.
 //!
 //! Memory: the buffer wants each bee's history contiguous (node-major) but frames arrive
 //! one at a time (frame-major). Each frame's keys are appended to a scratch file as they
@@ -21,14 +25,11 @@
 //! plus one bounded block buffer, whatever the shot length. The JSON (about 1.5 kB per
 //! bee) is the part that grows with the bee count.
 
-mod mesh;
-
-pub use mesh::{BeeMesh, Primitive};
-
 use super::{CacheWriter, OutputOptions};
 use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
+use crate::species::{Alpha, Drive, Primitive, Species};
 use glam::{Quat, Vec3};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
@@ -57,8 +58,10 @@ const WING_PHASES: u64 = 8;
 const WING_ALPHA_FLAP: f32 = 0.45;
 const WING_ALPHA_BLUR: f32 = 0.18;
 
-/// Floats spilled per bee per frame: bee translation (3), bee rotation (4), sway (1),
-/// body rotation (4), scale (1). Stored little-endian, exactly the bytes the buffer holds.
+/// Floats spilled per agent per frame: agent translation (3), agent rotation (4), lateral
+/// offset (1), body rotation (4), scale (1). Stored little-endian, exactly the bytes the
+/// buffer holds. Then one channel value per channel-driven part (as many as the species
+/// of the shot with the most), turned into rotations at `finish`.
 const RECORD_FLOATS: usize = 13;
 const RECORD_BYTES: usize = RECORD_FLOATS * 4;
 /// Upper bound of the transpose block at `finish`.
@@ -110,6 +113,11 @@ fn wing_angle(flap_hz: f64, t: f64, group: u64) -> f32 {
     WING_MID_DEG + WING_AMPLITUDE_DEG * phase.sin() as f32
 }
 
+/// Rotation of a part driven by a channel: `deg` degrees about `axis`.
+pub fn channel_rotation(axis: Vec3, deg: f32) -> Quat {
+    Quat::from_axis_angle(axis.normalize(), deg.to_radians())
+}
+
 /// Key times: exactly `(frame − start) / fps`, rounded once to f32.
 fn key_times(meta: &CacheMeta) -> Vec<f32> {
     (0..meta.frame_count())
@@ -117,19 +125,37 @@ fn key_times(meta: &CacheMeta) -> Vec<f32> {
         .collect()
 }
 
+/// The node name of a honeybee (`bee_000123`).
 pub fn bee_name(id: u64) -> String {
-    format!("bee_{id:06}")
+    agent_name(&crate::species::HONEYBEE, id)
+}
+
+/// The node name of an agent: `<species.agent>_<id, 6 digits or more>`.
+pub fn agent_name(species: &Species, id: u64) -> String {
+    format!("{}_{id:06}", species.agent)
 }
 
 /// Per-bee state kept in memory between frames (everything else is in the scratch file).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct BeeState {
     /// First-frame record: the nodes' rest TRS, so a viewer without animation shows frame 1.
     first: [f32; RECORD_FLOATS],
+    /// First-frame values of the channels driving parts (`SwarmPlan::driven` order).
+    first_driven: Box<[f32]>,
     prev_bee_r: Quat,
     prev_body_r: Quat,
     /// Scale is nominally constant per bee; a scale track is written only if it is not.
     scale_varies: bool,
+    swarm: usize,
+}
+
+/// What one swarm's species takes from its channels.
+#[derive(Clone, Debug)]
+struct SwarmPlan {
+    /// Column of the lateral offset channel (`None`: 0).
+    lateral: Option<usize>,
+    /// Parts driven by a channel, in part order: (part, channel column, axis).
+    driven: Vec<(usize, usize, Vec3)>,
 }
 
 pub struct GltfWriter {
@@ -142,6 +168,10 @@ pub struct GltfWriter {
     scratch: ScratchFile,
     /// Bee ids per swarm, from the first frame; every later frame must match.
     ids: Vec<Vec<u64>>,
+    plans: Vec<SwarmPlan>,
+    /// Bytes spilled per agent per frame (`RECORD_BYTES` + 4 per driven part, padded to the
+    /// species with the most).
+    record_bytes: usize,
     bees: Vec<BeeState>,
     next_frame: i32,
     record: Vec<u8>,
@@ -182,14 +212,35 @@ impl GltfWriter {
                 meta.frame_start, meta.frame_end, meta.fps
             )));
         }
+        let mut plans = Vec::new();
         for s in &meta.swarms {
-            if !(s.bee_length_m.is_finite() && s.bee_length_m > 0.0) {
+            if !(s.body_length_m.is_finite() && s.body_length_m > 0.0) {
                 return Err(Error::input(format!(
-                    "swarm {}: bee length must be positive, got {}",
-                    s.name, s.bee_length_m
+                    "swarm {}: body length must be positive, got {}",
+                    s.name, s.body_length_m
                 )));
             }
+            s.species
+                .check(&s.channels)
+                .map_err(|e| Error::input(format!("swarm {}: {e}", s.name)))?;
+            let driven = s
+                .species
+                .parts
+                .iter()
+                .enumerate()
+                .filter_map(|(k, p)| match p.drive {
+                    Drive::Channel { channel, axis } => {
+                        Some((k, s.channel(channel).expect("checked above"), axis))
+                    }
+                    _ => None,
+                })
+                .collect();
+            plans.push(SwarmPlan {
+                lateral: s.lateral_offset(),
+                driven,
+            });
         }
+        let most_driven = plans.iter().map(|p| p.driven.len()).max().unwrap_or(0);
         let dir = path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
@@ -204,6 +255,8 @@ impl GltfWriter {
             spill: Some(BufWriter::with_capacity(1 << 20, file)),
             scratch,
             ids: Vec::new(),
+            plans,
+            record_bytes: RECORD_BYTES + 4 * most_driven,
             bees: Vec::new(),
             next_frame: meta.frame_start,
             record: Vec::new(),
@@ -231,23 +284,28 @@ impl CacheWriter for GltfWriter {
                 s.position.len(),
                 s.heading.len(),
                 s.orientation.len(),
-                s.sway_m.len(),
                 s.scale.len(),
             ];
-            if lengths.iter().any(|&l| l != n) || s.ids != self.ids[si] {
+            let channels_ok = s.channels.len() == self.meta.swarms[si].channels.len()
+                && s.channels.iter().all(|c| c.len() == n);
+            if lengths.iter().any(|&l| l != n) || !channels_ok || s.ids != self.ids[si] {
                 return Err(Error::bake(format!(
                     "glTF writer: swarm {} at frame {} does not have the bees of the first frame",
                     self.meta.swarms[si].name, frame.frame
                 )));
             }
+            let plan = &self.plans[si];
             for i in 0..n {
+                let lateral = s.channel_or_zero(plan.lateral, i);
                 let (bee_t, bee_r, body_r) =
-                    split_pose(s.position[i], s.heading[i], s.orientation[i], s.sway_m[i]);
+                    split_pose(s.position[i], s.heading[i], s.orientation[i], lateral);
                 let scale = s.scale[i];
+                let driven = plan.driven.iter().map(|&(_, c, _)| s.channels[c][i]);
                 let finite = bee_t.is_finite()
                     && bee_r.is_finite()
                     && body_r.is_finite()
-                    && s.sway_m[i].is_finite()
+                    && lateral.is_finite()
+                    && driven.clone().all(f32::is_finite)
                     && scale.is_finite()
                     && scale > 0.0;
                 if !finite {
@@ -267,29 +325,22 @@ impl CacheWriter for GltfWriter {
                     )
                 };
                 let rec: [f32; RECORD_FLOATS] = [
-                    bee_t.x,
-                    bee_t.y,
-                    bee_t.z,
-                    bee_r.x,
-                    bee_r.y,
-                    bee_r.z,
-                    bee_r.w,
-                    s.sway_m[i],
-                    body_r.x,
-                    body_r.y,
-                    body_r.z,
-                    body_r.w,
-                    scale,
+                    bee_t.x, bee_t.y, bee_t.z, bee_r.x, bee_r.y, bee_r.z, bee_r.w, lateral,
+                    body_r.x, body_r.y, body_r.z, body_r.w, scale,
                 ];
-                for v in rec {
+                let at = self.record.len();
+                for v in rec.into_iter().chain(driven.clone()) {
                     self.record.extend_from_slice(&v.to_le_bytes());
                 }
+                self.record.resize(at + self.record_bytes, 0);
                 if first {
                     self.bees.push(BeeState {
                         first: rec,
+                        first_driven: driven.collect(),
                         prev_bee_r: bee_r,
                         prev_body_r: body_r,
                         scale_varies: false,
+                        swarm: si,
                     });
                 } else {
                     let st = &mut self.bees[bee];
@@ -370,9 +421,10 @@ struct Layout {
     total: u64,
 }
 
-/// Bytes of one bee's tracks: bee T, bee R, body T, body R, and body S if it varies.
-fn bee_bytes(frames: usize, scale_varies: bool) -> usize {
-    frames * (12 + 16 + 12 + 16 + if scale_varies { 12 } else { 0 })
+/// Bytes of one agent's tracks: agent T, agent R, body T, body R, body S if it varies,
+/// then one rotation per channel-driven part.
+fn bee_bytes(frames: usize, scale_varies: bool, driven: usize) -> usize {
+    frames * (12 + 16 + 12 + 16 + if scale_varies { 12 } else { 0 } + 16 * driven)
 }
 
 fn pad4(v: &mut Vec<u8>, fill: u8) {
@@ -497,38 +549,70 @@ impl Layout {
             })
         };
 
-        // Materials, shared by every mesh.
+        // Materials of every species in the shot, in order of first appearance, shared by
+        // every mesh (a material name already pushed is reused).
         let wing_alpha = if w.flap_hz > 0.0 {
             WING_ALPHA_FLAP
         } else {
             WING_ALPHA_BLUR
         };
-        let yellow = root.push(material("bee_yellow", [0.85, 0.55, 0.05, 1.0], 0.6, false));
-        let black = root.push(material("bee_black", [0.03, 0.025, 0.02, 1.0], 0.45, false));
-        let wing_mat = root.push(material(
-            "bee_wing",
-            [0.8, 0.85, 0.9, wing_alpha],
-            0.25,
-            true,
-        ));
+        let mut material_names: Vec<&str> = Vec::new();
+        let mut species_materials: Vec<(&str, Vec<Index<json::Material>>)> = Vec::new();
+        for s in &meta.swarms {
+            let sp = s.species;
+            if species_materials.iter().any(|(n, _)| *n == sp.name) {
+                continue;
+            }
+            let mut indices = Vec::new();
+            for m in sp.materials {
+                if let Some(k) = material_names.iter().position(|n| *n == m.name) {
+                    indices.push(Index::new(k as u32));
+                    continue;
+                }
+                let [r, g, b] = m.rgb;
+                let (alpha, blend) = match m.alpha {
+                    Alpha::Opaque => (1.0, false),
+                    Alpha::Membrane => (wing_alpha, true),
+                };
+                material_names.push(m.name);
+                indices.push(root.push(material(m.name, [r, g, b, alpha], m.roughness, blend)));
+            }
+            species_materials.push((sp.name, indices));
+        }
 
-        // One mesh set per distinct bee length (usually one for the whole shot).
+        // One mesh set per distinct (species, body length): usually one for the shot.
         struct MeshSet {
+            species: &'static str,
             length_bits: u32,
-            body: Index<json::Mesh>,
-            wing_l: Index<json::Mesh>,
-            wing_r: Index<json::Mesh>,
-            hinge_r: Vec3,
+            /// Per part: its mesh, if it has one.
+            meshes: Vec<Option<Index<json::Mesh>>>,
+            /// Per part: its rest translation in its parent's frame.
+            offsets: Vec<Vec3>,
         }
         let mut sets: Vec<MeshSet> = Vec::new();
         let mut swarm_set = Vec::new();
         for s in &meta.swarms {
-            let bits = s.bee_length_m.to_bits();
-            if let Some(k) = sets.iter().position(|m| m.length_bits == bits) {
+            let sp = s.species;
+            let bits = s.body_length_m.to_bits();
+            if let Some(k) = sets
+                .iter()
+                .position(|m| m.species == sp.name && m.length_bits == bits)
+            {
                 swarm_set.push(k);
                 continue;
             }
-            let bee = BeeMesh::new(s.bee_length_m);
+            let mats = &species_materials
+                .iter()
+                .find(|(n, _)| *n == sp.name)
+                .expect("materials of every species")
+                .1;
+            let part_meshes = (sp.meshes)(s.body_length_m);
+            assert_eq!(
+                part_meshes.len(),
+                sp.parts.len(),
+                "species {}: one mesh entry per part",
+                sp.name
+            );
             let prim =
                 |root: &mut Root, head: &mut Vec<u8>, p: &Primitive, mat: Index<json::Material>| {
                     let (lo, hi) = p.bounds();
@@ -572,34 +656,34 @@ impl Layout {
                         targets: None,
                     }
                 };
-            let tag = format!("bee_{}mm", fmt_mm(s.bee_length_m));
-            let body = json::Mesh {
-                name: Some(format!("{tag}_body")),
-                primitives: vec![
-                    prim(&mut root, &mut head, &bee.body_yellow, yellow),
-                    prim(&mut root, &mut head, &bee.body_black, black),
-                ],
-                extensions: None,
-                extras: None,
-                weights: None,
-            };
-            let wing =
-                |root: &mut Root, head: &mut Vec<u8>, p: &Primitive, side: &str| json::Mesh {
-                    name: Some(format!("{tag}_wing_{side}")),
-                    primitives: vec![prim(root, head, p, wing_mat)],
+            let tag = format!("{}_{}mm", sp.agent, fmt_mm(s.body_length_m));
+            let mut meshes = Vec::new();
+            let mut offsets = Vec::new();
+            for (part, pm) in sp.parts.iter().zip(&part_meshes) {
+                offsets.push(pm.offset);
+                if pm.primitives.is_empty() {
+                    meshes.push(None);
+                    continue;
+                }
+                let primitives = pm
+                    .primitives
+                    .iter()
+                    .map(|(p, m)| prim(&mut root, &mut head, p, mats[*m]))
+                    .collect();
+                meshes.push(Some(root.push(json::Mesh {
+                    name: Some(format!("{tag}_{}", part.name)),
+                    primitives,
                     extensions: None,
                     extras: None,
                     weights: None,
-                };
-            let wing_l = wing(&mut root, &mut head, &bee.wing_left, "l");
-            let wing_r = wing(&mut root, &mut head, &bee.wing_right, "r");
+                })));
+            }
             swarm_set.push(sets.len());
             sets.push(MeshSet {
+                species: sp.name,
                 length_bits: bits,
-                body: root.push(body),
-                wing_l: root.push(wing_l),
-                wing_r: root.push(wing_r),
-                hinge_r: bee.wing_hinge_right,
+                meshes,
+                offsets,
             });
         }
 
@@ -622,13 +706,24 @@ impl Layout {
         });
 
         // Wing tracks, one (left, right) pair per phase group in use, shared by many bees.
-        let flapping = animated && w.flap_hz > 0.0;
+        let flaps = |s: &crate::sim::SwarmMeta| {
+            s.species
+                .parts
+                .iter()
+                .any(|p| matches!(p.drive, Drive::Flap { .. }))
+        };
+        let flapping = animated && w.flap_hz > 0.0 && meta.swarms.iter().any(flaps);
         let mut wing_tracks: Vec<Option<(Index<json::Accessor>, Index<json::Accessor>)>> =
             vec![None; WING_PHASES as usize];
         if flapping {
             let mut used = [false; WING_PHASES as usize];
-            for id in w.ids.iter().flatten() {
-                used[(id % WING_PHASES) as usize] = true;
+            // Only the groups of agents with flapping parts: no unused accessor.
+            for (ids, s) in w.ids.iter().zip(&meta.swarms) {
+                if flaps(s) {
+                    for id in ids {
+                        used[(id % WING_PHASES) as usize] = true;
+                    }
+                }
             }
             let groups: Vec<u64> = (0..WING_PHASES).filter(|&g| used[g as usize]).collect();
             let mut bytes = Vec::new();
@@ -686,6 +781,8 @@ impl Layout {
         let mut g = 0;
         for (si, s) in meta.swarms.iter().enumerate() {
             let set = &sets[swarm_set[si]];
+            let sp = s.species;
+            let plan = &w.plans[si];
             let swarm_root = root.push(node(s.name.clone()));
             scene_nodes.push(swarm_root);
             let mut children = Vec::new();
@@ -693,7 +790,7 @@ impl Layout {
                 let st = &w.bees[g];
                 let f = &st.first;
                 g += 1;
-                let size = bee_bytes(frames, st.scale_varies);
+                let size = bee_bytes(frames, st.scale_varies, plan.driven.len());
                 let bv = root.push(json::buffer::View {
                     buffer,
                     byte_length: USize64(size as u64),
@@ -712,8 +809,15 @@ impl Layout {
                 let body_s = st
                     .scale_varies
                     .then(|| root.push(accessor(bv, frames * 56, frames, F32, Type::Vec3)));
+                let driven_at = frames * if st.scale_varies { 68 } else { 56 };
+                let driven_r: Vec<Index<json::Accessor>> = (0..plan.driven.len())
+                    .map(|j| {
+                        let at = driven_at + j * frames * 16;
+                        root.push(accessor(bv, at, frames, F32, Type::Vec4))
+                    })
+                    .collect();
 
-                let name = bee_name(id);
+                let name = agent_name(sp, id);
                 let group = (id % WING_PHASES) as usize;
                 let wing_pose = |right: bool| {
                     let up = if flapping {
@@ -723,51 +827,86 @@ impl Layout {
                     };
                     json::scene::UnitQuaternion(wing_rotation(up, right).to_array())
                 };
-                let hinge = |right: bool| {
-                    let z = if right { set.hinge_r.z } else { -set.hinge_r.z };
-                    [set.hinge_r.x, set.hinge_r.y, z]
+                // Parents before children in the node list, so the document reads top-down:
+                // the agent node, then one node per part in part order.
+                let base = root.nodes.len();
+                let at = |k: usize| Index::<json::Node>::new((base + k) as u32);
+                let part_node = |k: usize| at(1 + k);
+                let kids = |parent: Option<usize>| {
+                    let v: Vec<_> = sp.children(parent).map(part_node).collect();
+                    (!v.is_empty()).then_some(v)
                 };
-                // Parents before children in the node list, so the document reads top-down.
-                let at = |k: usize| Index::<json::Node>::new((root.nodes.len() + k) as u32);
-                let (bee, body, wing_l, wing_r) = (at(0), at(1), at(2), at(3));
+                let bee = at(0);
                 root.push(json::Node {
-                    children: Some(vec![body]),
+                    children: kids(None),
                     translation: Some([f[0], f[1], f[2]]),
                     rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
                     ..node(name.clone())
                 });
-                root.push(json::Node {
-                    mesh: Some(set.body),
-                    children: Some(vec![wing_l, wing_r]),
-                    translation: Some([0.0, 0.0, f[7]]),
-                    rotation: Some(json::scene::UnitQuaternion([f[8], f[9], f[10], f[11]])),
-                    scale: (f[12] != 1.0).then_some([f[12]; 3]),
-                    ..node(format!("{name}_body"))
-                });
-                root.push(json::Node {
-                    mesh: Some(set.wing_l),
-                    translation: Some(hinge(false)),
-                    rotation: Some(wing_pose(false)),
-                    ..node(format!("{name}_wing_l"))
-                });
-                root.push(json::Node {
-                    mesh: Some(set.wing_r),
-                    translation: Some(hinge(true)),
-                    rotation: Some(wing_pose(true)),
-                    ..node(format!("{name}_wing_r"))
-                });
+                for (k, part) in sp.parts.iter().enumerate() {
+                    let o = set.offsets[k];
+                    let base = json::Node {
+                        mesh: set.meshes[k],
+                        children: kids(Some(k)),
+                        ..node(format!("{name}_{}", part.name))
+                    };
+                    let n = match part.drive {
+                        Drive::Attitude => json::Node {
+                            translation: Some([0.0, 0.0, f[7]]),
+                            rotation: Some(json::scene::UnitQuaternion([f[8], f[9], f[10], f[11]])),
+                            scale: (f[12] != 1.0).then_some([f[12]; 3]),
+                            ..base
+                        },
+                        Drive::Flap { right } => json::Node {
+                            translation: Some(o.to_array()),
+                            rotation: Some(wing_pose(right)),
+                            ..base
+                        },
+                        Drive::Channel { axis, .. } => {
+                            let j = plan
+                                .driven
+                                .iter()
+                                .position(|d| d.0 == k)
+                                .expect("every channel-driven part is planned");
+                            let q = canonical(channel_rotation(axis, st.first_driven[j]));
+                            json::Node {
+                                translation: Some(o.to_array()),
+                                rotation: Some(json::scene::UnitQuaternion(q.to_array())),
+                                ..base
+                            }
+                        }
+                        Drive::Static => json::Node {
+                            translation: Some(o.to_array()),
+                            ..base
+                        },
+                    };
+                    root.push(n);
+                }
                 children.push(bee);
                 track(&mut samplers, &mut channels, bee, bee_t, Translation);
                 track(&mut samplers, &mut channels, bee, bee_r, Rotation);
-                track(&mut samplers, &mut channels, body, body_t, Translation);
-                track(&mut samplers, &mut channels, body, body_r, Rotation);
-                if let Some(body_s) = body_s {
-                    track(&mut samplers, &mut channels, body, body_s, Scale);
-                }
-                if flapping {
-                    let (l, r) = wing_tracks[group].expect("a track for every group in use");
-                    track(&mut samplers, &mut channels, wing_l, l, Rotation);
-                    track(&mut samplers, &mut channels, wing_r, r, Rotation);
+                for (k, part) in sp.parts.iter().enumerate() {
+                    let pn = part_node(k);
+                    match part.drive {
+                        Drive::Attitude => {
+                            track(&mut samplers, &mut channels, pn, body_t, Translation);
+                            track(&mut samplers, &mut channels, pn, body_r, Rotation);
+                            if let Some(body_s) = body_s {
+                                track(&mut samplers, &mut channels, pn, body_s, Scale);
+                            }
+                        }
+                        Drive::Flap { right } if flapping => {
+                            let (l, r) =
+                                wing_tracks[group].expect("a track for every group in use");
+                            let out = if right { r } else { l };
+                            track(&mut samplers, &mut channels, pn, out, Rotation);
+                        }
+                        Drive::Channel { .. } => {
+                            let j = plan.driven.iter().position(|d| d.0 == k).expect("planned");
+                            track(&mut samplers, &mut channels, pn, driven_r[j], Rotation);
+                        }
+                        Drive::Flap { .. } | Drive::Static => {}
+                    }
                 }
             }
             if !children.is_empty() {
@@ -817,21 +956,22 @@ fn write_bin(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()
     let frames = w.meta.frame_count();
     let bees = w.bee_count();
     let mut scratch = File::open(&w.scratch.path).map_err(sio)?;
-    let block = (w.transpose_budget / (frames * RECORD_BYTES)).clamp(1, bees.max(1));
-    let mut buf = vec![0u8; block.min(bees) * frames * RECORD_BYTES];
+    let rb = w.record_bytes;
+    let block = (w.transpose_budget / (frames * rb)).clamp(1, bees.max(1));
+    let mut buf = vec![0u8; block.min(bees) * frames * rb];
     let mut track = Vec::new();
     let mut b0 = 0;
     while b0 < bees {
         let nb = block.min(bees - b0);
         // buf[(f * nb + b) * RECORD_BYTES..] = record of bee b0 + b at frame f
         for f in 0..frames {
-            let at = ((f * bees + b0) * RECORD_BYTES) as u64;
+            let at = ((f * bees + b0) * rb) as u64;
             scratch.seek(SeekFrom::Start(at)).map_err(sio)?;
-            let dst = &mut buf[f * nb * RECORD_BYTES..(f + 1) * nb * RECORD_BYTES];
+            let dst = &mut buf[f * nb * rb..(f + 1) * nb * rb];
             scratch.read_exact(dst).map_err(sio)?;
         }
         for b in 0..nb {
-            let rec = |f: usize| &buf[(f * nb + b) * RECORD_BYTES..(f * nb + b + 1) * RECORD_BYTES];
+            let rec = |f: usize| &buf[(f * nb + b) * rb..(f * nb + b + 1) * rb];
             track.clear();
             for f in 0..frames {
                 track.extend_from_slice(&rec(f)[0..12]); // bee translation
@@ -846,10 +986,25 @@ fn write_bin(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()
             for f in 0..frames {
                 track.extend_from_slice(&rec(f)[32..48]); // body rotation
             }
-            if w.bees[b0 + b].scale_varies {
+            let st = &w.bees[b0 + b];
+            if st.scale_varies {
                 for f in 0..frames {
                     let s = &rec(f)[48..52];
                     track.extend_from_slice(&[s, s, s].concat());
+                }
+            }
+            for (j, &(_, _, axis)) in w.plans[st.swarm].driven.iter().enumerate() {
+                let mut prev = None;
+                for f in 0..frames {
+                    let at = RECORD_BYTES + 4 * j;
+                    let deg = f32::from_le_bytes(rec(f)[at..at + 4].try_into().expect("4 bytes"));
+                    let q = channel_rotation(axis, deg);
+                    let q = match prev {
+                        None => canonical(q),
+                        Some(p) => same_hemisphere(p, q),
+                    };
+                    prev = Some(q);
+                    track.extend_from_slice(&f32_bytes(q.to_array()));
                 }
             }
             out.write_all(&track).map_err(io)?;

@@ -19,7 +19,9 @@ fn meta(swarms: &[(&str, usize, f32)], start: i32, end: i32) -> CacheMeta {
             .map(|&(name, count, len)| SwarmMeta {
                 name: name.into(),
                 count,
-                bee_length_m: len,
+                species: &crate::species::HONEYBEE,
+                channels: crate::species::BEE_CHANNELS.to_vec(),
+                body_length_m: len,
                 wing_beat_hz: 230.0,
             })
             .collect(),
@@ -35,7 +37,10 @@ fn synth(meta: &CacheMeta, frame: i32, varying_scale: bool) -> Vec<SwarmFrame> {
     meta.swarms
         .iter()
         .map(|sm| {
-            let mut s = SwarmFrame::default();
+            let mut s = SwarmFrame {
+                channels: vec![Vec::new(); 3],
+                ..Default::default()
+            };
             for i in 0..sm.count {
                 let id = first_id + 7 * i as u64;
                 let phase = i as f32 * 0.37;
@@ -56,9 +61,9 @@ fn synth(meta: &CacheMeta, frame: i32, varying_scale: bool) -> Vec<SwarmFrame> {
                 s.velocity.push(Vec3::ZERO);
                 s.orientation.push(orientation);
                 s.heading.push(heading);
-                s.pitch_deg.push(pitch);
-                s.roll_deg.push(roll);
-                s.sway_m.push(0.01 * (5.0 * t + phase).sin());
+                s.channels[0].push(pitch);
+                s.channels[1].push(roll);
+                s.channels[2].push(0.01 * (5.0 * t + phase).sin());
                 s.angular_velocity_deg.push(Vec3::ZERO);
                 let scale = 0.9 + 0.1 * (i % 3) as f32;
                 let grow = if varying_scale && i == 0 { t } else { 0.0 };
@@ -251,7 +256,7 @@ fn body_world_pose_reconstructs_the_simulated_pose() {
                 let dt = doc.vec3s(doc.track(body, Property::Translation).unwrap().1)[k];
                 let dr = doc.quats(doc.track(body, Property::Rotation).unwrap().1)[k];
                 assert_eq!((dt.x, dt.y), (0.0, 0.0));
-                assert_eq!(dt.z, s.sway_m[i]);
+                assert_eq!(dt.z, s.channels[2][i]);
                 let world_p = bt + br * dt;
                 let world_q = br * dr;
                 assert!(
@@ -261,8 +266,8 @@ fn body_world_pose_reconstructs_the_simulated_pose() {
                 assert!(world_q.dot(s.orientation[i]).abs() > 1.0 - 1e-6);
                 // The bee node carries yaw only; pitch and roll live on the body.
                 assert!(br.dot(s.heading[i]).abs() > 1.0 - 1e-6);
-                let pr = Quat::from_rotation_z(s.pitch_deg[i].to_radians())
-                    * Quat::from_rotation_x(s.roll_deg[i].to_radians());
+                let pr = Quat::from_rotation_z(s.channels[0][i].to_radians())
+                    * Quat::from_rotation_x(s.channels[1][i].to_radians());
                 assert!(dr.dot(pr).abs() > 1.0 - 1e-5);
             }
         }
@@ -752,4 +757,299 @@ fn a_range_too_long_for_f32_key_times_is_refused() {
     assert!(matches!(err, Err(Error::Input(_))));
     m.frame_end = 1_000;
     assert!(GltfWriter::create(Container::Glb, &dir.path().join("a.glb"), &m, &opts(0.0)).is_ok());
+}
+
+/// A test-only articulated insect: a thorax (the attitude) with two wings driven by the
+/// channel "stroke" about X and an abdomen driven by "abdomen" about Z, no lateral offset.
+mod articulated {
+    use crate::species::{
+        Alpha, Channel, Drive, Material, Part, PartMesh, PolyMesh, Primitive, ProxyMesh, Species,
+    };
+    use glam::Vec3;
+
+    pub const CHANNELS: [Channel; 2] = [
+        Channel {
+            name: "stroke",
+            unit: "deg",
+            doc: "Wing stroke, degrees, tip up positive.",
+        },
+        Channel {
+            name: "abdomen",
+            unit: "deg",
+            doc: "Abdomen angle, degrees, tip up positive.",
+        },
+    ];
+
+    pub static MOTH: Species = Species {
+        name: "moth",
+        agent: "moth",
+        parts: &[
+            Part {
+                name: "thorax",
+                parent: None,
+                drive: Drive::Attitude,
+            },
+            Part {
+                name: "wing_l",
+                parent: Some(0),
+                drive: Drive::Channel {
+                    channel: "stroke",
+                    axis: Vec3::X,
+                },
+            },
+            Part {
+                name: "wing_r",
+                parent: Some(0),
+                drive: Drive::Channel {
+                    channel: "stroke",
+                    axis: Vec3::NEG_X,
+                },
+            },
+            Part {
+                name: "abdomen",
+                parent: Some(0),
+                drive: Drive::Channel {
+                    channel: "abdomen",
+                    axis: Vec3::Z,
+                },
+            },
+        ],
+        lateral_offset: None,
+        materials: &[
+            Material {
+                name: "moth_body",
+                rgb: [0.3, 0.25, 0.2],
+                roughness: 0.7,
+                alpha: Alpha::Opaque,
+            },
+            Material {
+                name: "moth_wing",
+                rgb: [0.9, 0.85, 0.7],
+                roughness: 0.5,
+                alpha: Alpha::Membrane,
+            },
+        ],
+        meshes,
+        proxies,
+    };
+
+    /// A triangle in the XZ plane (normal +Y) spanning `a`, `b`, `c` (body lengths).
+    fn tri(length: f32, pts: [Vec3; 3]) -> Primitive {
+        let mut p = Primitive::default();
+        let v: Vec<u16> = pts.iter().map(|q| p.vertex(*q * length, Vec3::Y)).collect();
+        p.triangle(v[0], v[1], v[2]);
+        p
+    }
+
+    fn meshes(length: f32) -> Vec<PartMesh> {
+        let thorax = tri(
+            length,
+            [
+                Vec3::new(0.2, 0.0, 0.0),
+                Vec3::new(-0.1, 0.0, -0.1),
+                Vec3::new(-0.1, 0.0, 0.1),
+            ],
+        );
+        let wing = |side: f32| {
+            tri(
+                length,
+                [
+                    Vec3::ZERO,
+                    Vec3::new(0.1, 0.0, 0.6 * side),
+                    Vec3::new(-0.2, 0.0, 0.5 * side),
+                ],
+            )
+        };
+        let abdomen = tri(
+            length,
+            [
+                Vec3::ZERO,
+                Vec3::new(-0.5, 0.0, -0.05),
+                Vec3::new(-0.5, 0.0, 0.05),
+            ],
+        );
+        vec![
+            PartMesh {
+                primitives: vec![(thorax, 0)],
+                offset: Vec3::ZERO,
+            },
+            PartMesh {
+                primitives: vec![(wing(-1.0), 1)],
+                offset: Vec3::new(0.0, 0.05, -0.05) * length,
+            },
+            PartMesh {
+                primitives: vec![(wing(1.0), 1)],
+                offset: Vec3::new(0.0, 0.05, 0.05) * length,
+            },
+            PartMesh {
+                primitives: vec![(abdomen, 0)],
+                offset: Vec3::new(-0.1, 0.0, 0.0) * length,
+            },
+        ]
+    }
+
+    fn proxies(length: f32) -> Vec<ProxyMesh> {
+        meshes(length)
+            .into_iter()
+            .map(|pm| ProxyMesh {
+                mesh: PolyMesh {
+                    points: pm.primitives[0]
+                        .0
+                        .positions
+                        .iter()
+                        .map(|p| Vec3::from(*p) + pm.offset)
+                        .collect(),
+                    face_counts: vec![3],
+                    face_indices: vec![0, 1, 2],
+                },
+                color: [0.5, 0.4, 0.3],
+                opacity: None,
+            })
+            .collect()
+    }
+}
+
+/// Synthetic frames of the moth swarm: stroke and abdomen angles that swing through zero.
+fn moth_frames(m: &CacheMeta, f: i32) -> Vec<SwarmFrame> {
+    let t = (f - m.frame_start) as f32 / m.fps as f32;
+    let mut bees = synth(m, f, false);
+    for (s, sm) in bees.iter_mut().zip(&m.swarms) {
+        if sm.species.name == "moth" {
+            let n = s.len();
+            s.channels = vec![
+                (0..n).map(|i| 60.0 * (9.0 * t + i as f32).sin()).collect(),
+                (0..n)
+                    .map(|i| -20.0 + 25.0 * (2.0 * t + i as f32).cos())
+                    .collect(),
+            ];
+        }
+    }
+    bees
+}
+
+#[test]
+fn an_articulated_species_animates_its_channel_driven_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = meta(&[("bees", 2, 0.012), ("moths", 3, 0.03)], 1, 40);
+    m.swarms[1].species = &articulated::MOTH;
+    m.swarms[1].channels = articulated::CHANNELS.to_vec();
+    let mut paths = Vec::new();
+    for container in [Container::Glb, Container::Gltf] {
+        let ext = if container == Container::Glb {
+            "glb"
+        } else {
+            "gltf"
+        };
+        let path = dir.path().join(format!("moths.{ext}"));
+        let mut w: Box<dyn CacheWriter> =
+            Box::new(GltfWriter::create(container, &path, &m, &opts(6.0)).unwrap());
+        for f in m.frame_start..=m.frame_end {
+            let swarms = moth_frames(&m, f);
+            w.write_frame(&Frame {
+                frame: f,
+                time: (f - m.frame_start) as f64 / m.fps,
+                swarms: &swarms,
+            })
+            .unwrap();
+        }
+        crate::atomic::commit_all(w.finish().unwrap()).unwrap();
+        paths.push(path);
+    }
+    let doc = read(&paths[0]);
+    let moth_ids: Vec<u64> = moth_frames(&m, 1)[1].ids.clone();
+    for (i, &id) in moth_ids.iter().enumerate() {
+        let name = agent_name(&articulated::MOTH, id);
+        let agent = doc.node(&name);
+        let kids: Vec<String> = doc.root.nodes[agent.value()]
+            .children
+            .clone()
+            .unwrap()
+            .iter()
+            .map(|k| doc.root.nodes[k.value()].name.clone().unwrap())
+            .collect();
+        assert_eq!(kids, [format!("{name}_thorax")]);
+        let thorax = doc.node(&format!("{name}_thorax"));
+        let parts: Vec<String> = doc.root.nodes[thorax.value()]
+            .children
+            .clone()
+            .unwrap()
+            .iter()
+            .map(|k| doc.root.nodes[k.value()].name.clone().unwrap())
+            .collect();
+        assert_eq!(
+            parts,
+            ["wing_l", "wing_r", "abdomen"].map(|p| format!("{name}_{p}"))
+        );
+        // No lateral offset: the thorax sits on the path node.
+        let dt = doc.vec3s(doc.track(thorax, Property::Translation).unwrap().1);
+        assert!(dt.iter().all(|t| *t == Vec3::ZERO));
+        for (part, channel, axis) in [
+            ("wing_l", 0, Vec3::X),
+            ("wing_r", 0, Vec3::NEG_X),
+            ("abdomen", 1, Vec3::Z),
+        ] {
+            let node = doc.node(&format!("{name}_{part}"));
+            let q = doc.quats(doc.track(node, Property::Rotation).unwrap().1);
+            assert_eq!(q.len(), m.frame_count());
+            for (k, f) in (m.frame_start..=m.frame_end).enumerate() {
+                let deg = moth_frames(&m, f)[1].channels[channel][i];
+                // The key is the channel's rotation (up to sign), about the part's axis.
+                let expect = channel_rotation(axis, deg);
+                assert!(q[k].dot(expect).abs() > 1.0 - 1e-6, "{part} frame {f}");
+                let (got_axis, got_angle) = q[k].to_axis_angle();
+                let signed = got_angle.to_degrees() * got_axis.dot(axis).signum();
+                let wrapped = (signed - deg + 540.0).rem_euclid(360.0) - 180.0;
+                assert!(wrapped.abs() < 1e-3, "{part} frame {f}: {signed} vs {deg}");
+                if k > 0 {
+                    assert!(q[k - 1].dot(q[k]) >= 0.0);
+                }
+            }
+            // Rest pose: the first key; rest translation: the part's offset.
+            let n = &doc.root.nodes[node.value()];
+            assert_eq!(n.rotation.as_ref().unwrap().0, q[0].to_array());
+            assert!(n.translation.is_some());
+        }
+    }
+    // The bees of the same shot keep their flapping wings.
+    let bee = bee_name(100);
+    let wing = doc.node(&format!("{bee}_wing_r"));
+    assert!(doc.track(wing, Property::Rotation).is_some());
+    let mesh_names: Vec<String> = doc
+        .root
+        .meshes
+        .iter()
+        .map(|m| m.name.clone().unwrap())
+        .collect();
+    assert_eq!(
+        mesh_names,
+        [
+            "bee_12mm_body",
+            "bee_12mm_wing_l",
+            "bee_12mm_wing_r",
+            "moth_30mm_thorax",
+            "moth_30mm_wing_l",
+            "moth_30mm_wing_r",
+            "moth_30mm_abdomen"
+        ]
+    );
+    for path in &paths {
+        let Some(report) = validator_report(path) else {
+            eprintln!("skipped: set BEESWARM_NODE_MODULES to run the glTF validator");
+            return;
+        };
+        let issues = &report["issues"];
+        assert_eq!(issues["numErrors"], 0, "{report:#}");
+        assert_eq!(issues["numWarnings"], 0, "{report:#}");
+        assert_eq!(issues["numInfos"], 0, "{report:#}");
+    }
+}
+
+#[test]
+fn a_part_driven_by_a_channel_the_model_does_not_record_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = meta(&[("moths", 1, 0.03)], 1, 2);
+    m.swarms[0].species = &articulated::MOTH;
+    m.swarms[0].channels = articulated::CHANNELS[..1].to_vec();
+    let err = GltfWriter::create(Container::Glb, &dir.path().join("a.glb"), &m, &opts(0.0));
+    assert!(matches!(err, Err(Error::Input(_))));
 }

@@ -1,43 +1,12 @@
-//! The bee prototype: a small procedural honeybee at real scale, in metres.
+//! The honeybee's USD prototype geometry: a small procedural bee at real scale, in metres.
 //!
 //! Body along +X (head forward), wings spanning ±Z, Y up; the origin is near the centre
 //! of mass (over the thorax), because instance positions are the bee's centre of mass.
 //! Proportions follow a worker honeybee: 12 mm long, thorax about 4 mm across, forewing
-//! span about 1.6 body lengths. Everything scales with `SwarmMeta.bee_length_m`.
+//! span about 1.6 body lengths. Everything scales with the swarm's body length.
 
+use crate::species::{PolyMesh as Mesh, newell_normal};
 use glam::Vec3;
-
-/// A polygon mesh: points, one vertex count per face, vertex indices.
-pub struct Mesh {
-    pub points: Vec<Vec3>,
-    pub face_counts: Vec<i32>,
-    pub face_indices: Vec<i32>,
-}
-
-impl Mesh {
-    pub fn extent(&self) -> [Vec3; 2] {
-        let lo = self.points.iter().copied().fold(Vec3::MAX, Vec3::min);
-        let hi = self.points.iter().copied().fold(Vec3::MIN, Vec3::max);
-        [lo, hi]
-    }
-
-    /// Largest distance of a point from the origin.
-    #[cfg(test)]
-    pub fn radius(&self) -> f32 {
-        self.points.iter().map(|p| p.length()).fold(0.0, f32::max)
-    }
-}
-
-/// The radius of a sphere at the origin holding the corners of the prototype's bounding
-/// box (body and wings). USD bounds an instancer by each instance's transformed
-/// prototype box, so a sphere around the box, not around the points, is what contains
-/// `UsdGeomPointInstancer::ComputeExtentAtTime` under every rotation.
-pub fn bound_radius(length: f32) -> f32 {
-    let [a, b] = body(length).extent();
-    let [c, d] = wings(length).extent();
-    let (lo, hi) = (a.min(c), b.max(d));
-    lo.abs().max(hi.abs()).length()
-}
 
 /// Body profile (x, radius) from head tip to abdomen tip, in body lengths: head,
 /// neck, thorax, waist (petiole), abdomen.
@@ -101,54 +70,32 @@ pub fn body(length: f32) -> Mesh {
     }
 }
 
-/// Two flat wings (one face each) over the thorax, swept back, spanning ±Z; faces point
-/// up (+Y) and are meant to be rendered double-sided.
-pub fn wings(length: f32) -> Mesh {
+/// One flat wing (one face) over the thorax, swept back, spanning +Z (right) or -Z
+/// (left); it faces up (+Y) and is meant to be rendered double-sided.
+pub fn wing(length: f32, right: bool) -> Mesh {
     const SEGMENTS: usize = 10;
     let y = 0.13;
-    let mut points = Vec::new();
-    let mut face_counts = Vec::new();
-    let mut face_indices = Vec::new();
-    for side in [1.0f32, -1.0] {
-        // An ellipse from the wing root (near the body's midline) to the tip.
-        let span_dir = Vec3::new(-0.25, 0.0, side).normalize();
-        let chord_dir = Vec3::new(span_dir.z, 0.0, -span_dir.x) * side;
-        let centre = Vec3::new(0.02, y, 0.0) + span_dir * 0.42;
-        let first = points.len() as i32;
-        for k in 0..SEGMENTS {
+    let side = if right { 1.0f32 } else { -1.0 };
+    // An ellipse from the wing root (near the body's midline) to the tip.
+    let span_dir = Vec3::new(-0.25, 0.0, side).normalize();
+    let chord_dir = Vec3::new(span_dir.z, 0.0, -span_dir.x) * side;
+    let centre = Vec3::new(0.02, y, 0.0) + span_dir * 0.42;
+    let points: Vec<Vec3> = (0..SEGMENTS)
+        .map(|k| {
             let a = std::f32::consts::TAU * k as f32 / SEGMENTS as f32;
-            points.push(
-                (centre + span_dir * (0.40 * a.cos()) + chord_dir * (0.11 * a.sin())) * length,
-            );
-        }
-        let mut face: Vec<i32> = (first..first + SEGMENTS as i32).collect();
-        // Wind the face so its normal points up, whichever way the ellipse went round.
-        if newell_normal(&points, &face).y < 0.0 {
-            face.reverse();
-        }
-        face_counts.push(SEGMENTS as i32);
-        face_indices.extend(face);
+            (centre + span_dir * (0.40 * a.cos()) + chord_dir * (0.11 * a.sin())) * length
+        })
+        .collect();
+    let mut face: Vec<i32> = (0..SEGMENTS as i32).collect();
+    // Wind the face so its normal points up, whichever way the ellipse went round.
+    if newell_normal(&points, &face).y < 0.0 {
+        face.reverse();
     }
     Mesh {
         points,
-        face_counts,
-        face_indices,
+        face_counts: vec![SEGMENTS as i32],
+        face_indices: face,
     }
-}
-
-/// The (unnormalised) normal of a polygon by Newell's method: right-handed winding.
-pub fn newell_normal(points: &[Vec3], face: &[i32]) -> Vec3 {
-    let mut n = Vec3::ZERO;
-    for i in 0..face.len() {
-        let a = points[face[i] as usize];
-        let b = points[face[(i + 1) % face.len()] as usize];
-        n += Vec3::new(
-            (a.y - b.y) * (a.z + b.z),
-            (a.z - b.z) * (a.x + b.x),
-            (a.x - b.x) * (a.y + b.y),
-        );
-    }
-    n
 }
 
 #[cfg(test)]
@@ -198,20 +145,30 @@ mod tests {
 
     #[test]
     fn wings_span_z_and_face_up() {
-        let m = wings(0.012);
-        let [lo, hi] = m.extent();
-        assert!(hi.z > 0.009 && lo.z < -0.009, "span about 19 mm");
-        assert!(lo.y > 0.0, "above the body axis");
-        for f in faces(&m) {
-            assert!(newell_normal(&m.points, &f).y > 0.0);
+        let (r, l) = (wing(0.012, true), wing(0.012, false));
+        assert!(
+            r.extent()[1].z > 0.009 && l.extent()[0].z < -0.009,
+            "span about 19 mm"
+        );
+        for m in [&r, &l] {
+            assert!(m.extent()[0].y > 0.0, "above the body axis");
+            for f in faces(m) {
+                assert!(newell_normal(&m.points, &f).y > 0.0);
+            }
+            let radius = m.points.iter().map(|p| p.length()).fold(0.0, f32::max);
+            assert!(radius > 0.009 && radius < 0.012);
         }
-        assert!(m.radius() > 0.009 && m.radius() < 0.012);
+        // Mirror images.
+        for (a, b) in r.points.iter().zip(&l.points) {
+            assert_eq!(*a * Vec3::new(1.0, 1.0, -1.0), *b);
+        }
     }
 
     #[test]
     fn bound_radius_holds_the_prototype_box() {
-        let r = bound_radius(0.012);
-        for m in [body(0.012), wings(0.012)] {
+        let proxies = (crate::species::HONEYBEE.proxies)(0.012);
+        let r = crate::species::bound_radius(&proxies);
+        for m in [body(0.012), wing(0.012, true), wing(0.012, false)] {
             let [lo, hi] = m.extent();
             for x in [lo.x, hi.x] {
                 for y in [lo.y, hi.y] {

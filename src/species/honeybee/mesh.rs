@@ -1,4 +1,5 @@
-//! The procedural bee shared by every bee node: a striped body and two translucent wings.
+//! The honeybee's glTF geometry, shared by every bee node: a striped body and two
+//! translucent wings.
 //!
 //! Real scale: the body is exactly `length` metres long along +X (head at +X), centred on
 //! the body node's origin, so the body node's world position is the bee's centre as
@@ -9,50 +10,8 @@
 //! cut into colour bands (two primitives, yellow and black) so the stripes survive any
 //! importer: vertex colours are not shaded by default in several DCCs, materials are.
 
+use crate::species::Primitive;
 use glam::Vec3;
-
-/// One indexed triangle list in body-local metres.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Primitive {
-    pub positions: Vec<[f32; 3]>,
-    pub normals: Vec<[f32; 3]>,
-    pub indices: Vec<u16>,
-}
-
-impl Primitive {
-    fn vertex(&mut self, p: Vec3, n: Vec3) -> u16 {
-        let i = self.positions.len();
-        self.positions.push(p.to_array());
-        self.normals.push(n.normalize().to_array());
-        u16::try_from(i).expect("the bee mesh is far below 65,536 vertices")
-    }
-
-    /// Adds a triangle facing the side its vertex normals point to, so winding never
-    /// depends on which way a loop happened to run (glTF front faces are counter-clockwise).
-    fn triangle(&mut self, a: u16, b: u16, c: u16) {
-        let p = |i: u16| Vec3::from(self.positions[i as usize]);
-        let n = |i: u16| Vec3::from(self.normals[i as usize]);
-        let face = (p(b) - p(a)).cross(p(c) - p(a));
-        if face.dot(n(a) + n(b) + n(c)) >= 0.0 {
-            self.indices.extend([a, b, c]);
-        } else {
-            self.indices.extend([a, c, b]);
-        }
-    }
-
-    /// Component-wise bounds of the positions (glTF requires them on POSITION).
-    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in &self.positions {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        (lo, hi)
-    }
-}
 
 /// The bee prototype for one body length.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,25 +29,25 @@ pub struct BeeMesh {
 }
 
 /// Ellipsoid of revolution about X: centre x, half length, radius — all in body lengths.
-struct Part {
+struct Lobe {
     cx: f32,
     a: f32,
     b: f32,
 }
 
 /// Head (front), thorax, abdomen; spans exactly x ∈ [-0.5, 0.5].
-const PARTS: [Part; 3] = [
-    Part {
+const PARTS: [Lobe; 3] = [
+    Lobe {
         cx: 0.40,
         a: 0.10,
         b: 0.11,
     },
-    Part {
+    Lobe {
         cx: 0.17,
         a: 0.13,
         b: 0.15,
     },
-    Part {
+    Lobe {
         cx: -0.20,
         a: 0.30,
         b: 0.17,
@@ -115,7 +74,7 @@ const SEGMENTS: usize = 14;
 const RINGS_PER_LENGTH: f32 = 48.0;
 
 /// The part whose surface is outermost at `x` (body lengths) and its radius there.
-fn profile(x: f32) -> (&'static Part, f32) {
+fn profile(x: f32) -> (&'static Lobe, f32) {
     let mut best = (&PARTS[0], 0.0f32);
     for p in &PARTS {
         let u = (x - p.cx) / p.a;
