@@ -10,7 +10,9 @@ use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
 use crate::model::bee::repulsion;
 use crate::model::context::NeighbourList;
-use crate::model::{Agent, Context, Model, Neighbour, Start, SwarmSetup, TargetNow, with_model};
+use crate::model::{
+    Agent, Context, Model, Neighbour, Pose, Start, SwarmSetup, TargetNow, with_model,
+};
 use crate::shot::{Region, Shot};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -23,6 +25,9 @@ struct Runner<M: Model> {
     next: Vec<M::Agent>,
     /// Global index of the first agent.
     start: usize,
+    /// Recording buffers, reused every frame: attitudes, and channel values agent by agent.
+    poses: Vec<Pose>,
+    values: Vec<f32>,
 }
 
 /// What the world does with a swarm, whatever its model: one call per swarm per pass.
@@ -55,16 +60,19 @@ impl<M: Model> Swarm for Runner<M> {
     }
 
     fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32) {
-        for (o, a) in out.iter_mut().zip(&self.agents) {
-            *o = Neighbour {
-                pos: a.position(),
-                radius: radius * a.size(),
-                vel: a.velocity(),
-                mass,
-                density: 0.0,
-                pressure: 0.0,
-            };
-        }
+        out.par_iter_mut()
+            .zip(self.agents.par_iter())
+            .with_min_len(1024)
+            .for_each(|(o, a)| {
+                *o = Neighbour {
+                    pos: a.position(),
+                    radius: radius * a.size(),
+                    vel: a.velocity(),
+                    mass,
+                    density: 0.0,
+                    pressure: 0.0,
+                };
+            });
     }
 
     fn gather(
@@ -134,31 +142,41 @@ impl<M: Model> Swarm for Runner<M> {
     fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32) {
         let n = self.agents.len();
         let channels = M::INFO.channels.len();
+        let (m, agents) = (&self.model, &self.agents);
+        // Attitudes and channel values in parallel (quaternions and angular velocities
+        // are most of a frame's recording); the columns are then filled in order.
+        self.poses.clear();
+        self.poses
+            .par_extend(agents.par_iter().with_min_len(512).map(|a| m.pose(a, dt)));
+        self.values.clear();
+        self.values.resize(n * channels, 0.0);
+        if channels > 0 {
+            self.values
+                .par_chunks_mut(channels)
+                .zip(agents.par_iter().zip(self.poses.par_iter()))
+                .with_min_len(512)
+                .for_each(|(out, (a, pose))| m.record(a, pose, out));
+        }
         f.ids.clear();
         f.ids.extend((0..n as u64).map(|k| first_id + k));
         f.position.clear();
+        f.position.extend(agents.iter().map(|a| a.position()));
         f.velocity.clear();
+        f.velocity.extend(agents.iter().map(|a| a.velocity()));
         f.orientation.clear();
+        f.orientation
+            .extend(self.poses.iter().map(|p| p.orientation));
         f.heading.clear();
+        f.heading.extend(self.poses.iter().map(|p| p.heading));
         f.angular_velocity_deg.clear();
+        f.angular_velocity_deg
+            .extend(self.poses.iter().map(|p| p.angular_velocity_deg));
         f.scale.clear();
+        f.scale.extend(agents.iter().map(|a| a.size()));
         f.channels.resize_with(channels, Vec::new);
-        for c in &mut f.channels {
-            c.clear();
-        }
-        let mut values = vec![0.0f32; channels];
-        for a in &self.agents {
-            let pose = self.model.pose(a, dt);
-            f.position.push(a.position());
-            f.velocity.push(a.velocity());
-            f.orientation.push(pose.orientation);
-            f.heading.push(pose.heading);
-            f.angular_velocity_deg.push(pose.angular_velocity_deg);
-            f.scale.push(a.size());
-            self.model.record(a, &pose, &mut values);
-            for (c, v) in f.channels.iter_mut().zip(&values) {
-                c.push(*v);
-            }
+        for (c, column) in f.channels.iter_mut().enumerate() {
+            column.clear();
+            column.extend(self.values.iter().skip(c).step_by(channels));
         }
     }
 }
@@ -272,6 +290,8 @@ impl Simulation {
                     next: Vec::with_capacity(agents.len()),
                     agents,
                     start: first,
+                    poses: Vec::new(),
+                    values: Vec::new(),
                 })
             }));
             first += s.count;
@@ -428,7 +448,8 @@ impl Simulation {
             swarm.neighbour_records(rest, s.bee.mass, s.bee.radius);
         }
         self.positions.clear();
-        self.positions.extend(self.agents.iter().map(|a| a.pos));
+        self.positions
+            .par_extend(self.agents.par_iter().map(|a| a.pos));
         self.grid.build(&self.positions, self.grid_cell);
 
         // Pass 1: neighbour lists and the models' gather passes, written in place.
