@@ -14,52 +14,51 @@ fn docs_models_md_matches_beeswarm_models_markdown() {
     );
 }
 
+/// The `name` of every entry of the list `v[key]`.
+fn names<'a>(v: &'a serde_json::Value, key: &str) -> Vec<&'a str> {
+    v[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["name"].as_str().unwrap())
+        .collect()
+}
+
 #[test]
 fn models_json_lists_every_model_with_its_parameters_and_presets() {
     let doc: serde_json::Value = serde_json::from_str(&beeswarm::cli::models::json()).unwrap();
     let models = doc["models"].as_array().unwrap();
-    let names: Vec<&str> = models.iter().map(|m| m["name"].as_str().unwrap()).collect();
-    for want in ["bee", "curl", "brownian", "boids"] {
-        assert!(names.contains(&want), "{want} missing from {names:?}");
-    }
-    let bee = &models[names.iter().position(|n| *n == "bee").unwrap()];
-    let params: Vec<&str> = bee["params"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["name"].as_str().unwrap())
-        .collect();
+    let model = |name: &str| models.iter().find(|m| m["name"] == name).unwrap();
+    assert_eq!(names(&doc, "models"), ["bee", "curl", "brownian", "boids"]);
+    let bee = model("bee");
+    let params = names(bee, "params");
     assert!(
         params.contains(&"kappa1") && params.contains(&"neighbour_radius"),
         "{params:?}"
     );
-    let presets: Vec<&str> = bee["presets"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(presets, ["nest", "grassland", "optimized"]);
+    assert_eq!(names(bee, "presets"), ["nest", "grassland", "optimized"]);
     // A preset's values are every parameter's value under it.
     assert_eq!(bee["presets"][1]["values"]["kappa2"], 5.0);
-    let channels: Vec<&str> = bee["channels"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(channels, ["pitch", "roll", "sway"]);
-    let curl = &models[names.iter().position(|n| *n == "curl").unwrap()];
-    let curl_params: Vec<&str> = curl["params"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["name"].as_str().unwrap())
-        .collect();
+    assert_eq!(names(bee, "channels"), ["pitch", "roll", "sway"]);
+    let curl = names(model("curl"), "params");
     assert!(
-        curl_params.contains(&"speed") && !curl_params.contains(&"kappa1"),
-        "{curl_params:?}"
+        curl.contains(&"speed") && !curl.contains(&"kappa1"),
+        "{curl:?}"
     );
+    // Models flying with the shared force-based flight declare its parameters.
+    for m in ["bee", "brownian", "boids"] {
+        let p = names(model(m), "params");
+        for shared in [
+            "speed",
+            "avoid_distance",
+            "heading_lag",
+            "collision_stiffness",
+            "attraction",
+            "containment",
+        ] {
+            assert!(p.contains(&shared), "{m} lacks {shared}");
+        }
+    }
     for m in models {
         for p in m["params"].as_array().unwrap() {
             let (lo, hi, d) = (

@@ -93,25 +93,54 @@ pub struct Flight {
 }
 
 impl Flight {
-    /// From the setup and the model's parameter values of the same names.
-    pub fn new(
-        setup: &SwarmSetup,
-        d0: f64,
-        heading_lag: f64,
-        spring: f64,
-        attraction: f64,
-        containment: f64,
-    ) -> Self {
+    /// From the setup and the model's parameters `avoid_distance`, `heading_lag`,
+    /// `collision_stiffness`, `attraction` and `containment`, which every model that flies
+    /// with `Flight` declares (with the same meaning; `tests/docs.rs` lists them).
+    pub fn new(setup: &SwarmSetup) -> Self {
+        let p = |name: &str| {
+            setup
+                .params
+                .get(name)
+                .unwrap_or_else(|| panic!("{} declares no `{name}`", setup.params.model().name()))
+        };
         Flight {
-            d0: d0 as f32,
-            yaw_blend: lag_blend(setup.dt as f32, heading_lag as f32),
-            spring: spring as f32,
-            attraction: attraction as f32,
-            containment: containment as f32,
+            d0: p("avoid_distance") as f32,
+            yaw_blend: lag_blend(setup.dt as f32, p("heading_lag") as f32),
+            spring: p("collision_stiffness") as f32,
+            attraction: p("attraction") as f32,
+            containment: p("containment") as f32,
             radius: setup.body.radius,
             bounds: setup.bounds,
             targets: setup.targets.clone(),
         }
+    }
+
+    /// A flyer's next state: [`Flight::advance`] without steering, the previous heading kept
+    /// for the angular velocity.
+    #[inline(always)]
+    pub fn fly(&self, cx: &Context, b: &Flyer, a: Vec3, a_col: Vec3) -> Flyer {
+        Flyer {
+            c: self.advance(cx, &b.c, a, a_col, Avoidance::default()),
+            prev_yaw: b.c.yaw,
+        }
+    }
+
+    /// The contact springs on agent i at `c` from every neighbour touching it.
+    #[inline(always)]
+    pub fn contacts(&self, cx: &Context, i: usize, c: &Cruiser) -> Vec3 {
+        let ri = self.body_radius(c.size);
+        let mut a_col = Vec3::ZERO;
+        cx.for_each_neighbour(i, ri + cx.max_body_radius, |j, pj, d2| {
+            let o = &cx.agents[j];
+            a_col += self.contact(
+                || separation_fallback(i, j),
+                ri + o.radius,
+                c.pos - pj,
+                d2.sqrt(),
+                c.vel - o.vel,
+            );
+        });
+        a_col
     }
 
     /// Body radius of an agent of scale `size`, m.

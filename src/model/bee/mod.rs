@@ -111,14 +111,7 @@ impl Model for BeeModel {
         let dt = s.dt;
         let kernels = Kernels::new(p.neighbour_radius as f32);
         BeeModel {
-            flight: Flight::new(
-                s,
-                p.avoid_distance,
-                p.heading_lag,
-                p.collision_stiffness,
-                p.attraction,
-                p.containment,
-            ),
+            flight: Flight::new(s),
             k1: p.kappa1 as f32,
             k2: p.kappa2 as f32,
             k3: p.kappa3 as f32,

@@ -2,7 +2,7 @@
 //! Fig. 9 and paper 002 in its evaluation.
 
 use super::context::Context;
-use super::flight::{self, Avoidance, Flight, Flyer};
+use super::flight::{self, Flight, Flyer};
 use super::params::DEFAULTS_ONLY;
 use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::Rng;
@@ -81,14 +81,7 @@ impl Model for BoidsModel {
     fn new(s: &SwarmSetup) -> Self {
         let p = BoidsParams::from_values(s.params);
         BoidsModel {
-            flight: Flight::new(
-                s,
-                p.avoid_distance,
-                p.heading_lag,
-                p.collision_stiffness,
-                p.attraction,
-                p.containment,
-            ),
+            flight: Flight::new(s),
             speed: p.speed as f32,
             h: p.neighbour_radius as f32,
         }
@@ -129,12 +122,7 @@ impl Model for BoidsModel {
             );
         });
         let a = accel(b.c.pos, b.c.vel, &hood, b.c.speed) + self.flight.pull(cx, b.c.pos);
-        Flyer {
-            c: self
-                .flight
-                .advance(cx, &b.c, a, a_col, Avoidance::default()),
-            prev_yaw: b.c.yaw,
-        }
+        self.flight.fly(cx, b, a, a_col)
     }
 
     fn pose(&self, b: &Flyer, dt: f32) -> Pose {

@@ -2,7 +2,7 @@
 //! velocity process), as the biology literature and paper 000 Sec. VIII compare against.
 
 use super::context::Context;
-use super::flight::{self, Avoidance, Flight, Flyer};
+use super::flight::{Flight, Flyer};
 use super::params::DEFAULTS_ONLY;
 use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::Rng;
@@ -61,14 +61,7 @@ impl Model for BrownianModel {
     fn new(s: &SwarmSetup) -> Self {
         let p = BrownianParams::from_values(s.params);
         BrownianModel {
-            flight: Flight::new(
-                s,
-                p.avoid_distance,
-                p.heading_lag,
-                p.collision_stiffness,
-                p.attraction,
-                p.containment,
-            ),
+            flight: Flight::new(s),
             speed: p.speed as f32,
         }
     }
@@ -83,27 +76,11 @@ impl Model for BrownianModel {
     }
 
     fn step(&self, cx: &Context, i: usize, b: &Flyer) -> Flyer {
-        let ri = self.flight.body_radius(b.c.size);
-        let mut a_col = Vec3::ZERO;
-        cx.for_each_neighbour(i, ri + cx.max_body_radius, |j, pj, d2| {
-            let o = &cx.agents[j];
-            a_col += self.flight.contact(
-                || flight::separation_fallback(i, j),
-                ri + o.radius,
-                b.c.pos - pj,
-                d2.sqrt(),
-                b.c.vel - o.vel,
-            );
-        });
+        let a_col = self.flight.contacts(cx, i, &b.c);
         let mut rng = cx.rng(0xB12, i);
         let xi = Vec3::new(rng.gaussian(), rng.gaussian(), rng.gaussian());
         let a = accel(b.c.vel, cx.wind, b.c.speed, xi, cx.dt) + self.flight.pull(cx, b.c.pos);
-        Flyer {
-            c: self
-                .flight
-                .advance(cx, &b.c, a, a_col, Avoidance::default()),
-            prev_yaw: b.c.yaw,
-        }
+        self.flight.fly(cx, b, a, a_col)
     }
 
     fn pose(&self, b: &Flyer, dt: f32) -> Pose {

@@ -10,13 +10,13 @@
 //! are never entered (the shared keep-out guard).
 
 use super::context::Context;
-use super::flight::{self, Avoidance, Cruiser, lag_blend};
+use super::flight::{self, Avoidance, Cruiser, Flyer, lag_blend};
 use super::params::DEFAULTS_ONLY;
-use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup};
+use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::field::CurlNoise;
 use crate::math::{self, Rng};
 use crate::species::HONEYBEE;
-use glam::{Quat, Vec3};
+use glam::Vec3;
 
 crate::declare_params! {
     /// Parameters of the curl-noise model.
@@ -33,29 +33,6 @@ crate::declare_params! {
         containment: "1/s²", 4.0, [0.0, 1000.0], "an acceleration from 0 to 1000";
         /// Time over which the targets' and bounds' pull (an acceleration) becomes velocity.
         response_time: "s", 0.25, [1e-3, 100.0], "a time from 0.001 to 100 s";
-    }
-}
-
-/// An agent of the curl model: a position, the velocity of its last step, a heading.
-#[derive(Clone, Copy, Debug)]
-pub struct Drifter {
-    c: Cruiser,
-    prev_yaw: f32,
-}
-
-impl Agent for Drifter {
-    fn position(&self) -> Vec3 {
-        self.c.pos
-    }
-    fn velocity(&self) -> Vec3 {
-        self.c.vel
-    }
-    fn size(&self) -> f32 {
-        self.c.size
-    }
-    fn place(&mut self, position: Vec3, velocity: Vec3) {
-        self.c.place(position, velocity);
-        self.prev_yaw = self.c.yaw;
     }
 }
 
@@ -90,7 +67,7 @@ fn rms(field: &CurlNoise, cell: f32) -> f32 {
 }
 
 impl Model for CurlModel {
-    type Agent = Drifter;
+    type Agent = Flyer;
     const INFO: ModelInfo = ModelInfo {
         name: "curl",
         summary: "Curl noise (paper 000's reference [17], paper 001 Eq. 1 at its plainest): \
@@ -127,13 +104,13 @@ impl Model for CurlModel {
         0.0
     }
 
-    fn spawn(&self, start: &Start, _rng: &mut Rng) -> Drifter {
-        let mut c = Cruiser::new(start, 1.0);
-        c.vel = self.velocity(c.pos);
-        Drifter { c, prev_yaw: c.yaw }
+    fn spawn(&self, start: &Start, _rng: &mut Rng) -> Flyer {
+        let mut f = Flyer::new(start, 1.0);
+        f.c.vel = self.velocity(f.c.pos);
+        f
     }
 
-    fn step(&self, cx: &Context, _i: usize, b: &Drifter) -> Drifter {
+    fn step(&self, cx: &Context, _i: usize, b: &Flyer) -> Flyer {
         let pull = flight::pull(
             cx,
             &self.targets,
@@ -146,7 +123,7 @@ impl Model for CurlModel {
         let ri = self.radius * b.c.size;
         let (pos, vel) = flight::keep_out(cx, b.c.pos, b.c.pos + vel * cx.dt, vel, ri);
         let yaw = flight::follow_heading(b.c.yaw, vel, Avoidance::default(), self.yaw_blend, cx.dt);
-        Drifter {
+        Flyer {
             c: Cruiser {
                 pos,
                 vel,
@@ -157,20 +134,11 @@ impl Model for CurlModel {
         }
     }
 
-    fn pose(&self, b: &Drifter, dt: f32) -> Pose {
-        let orientation = math::body_orientation(b.c.yaw, 0.0, 0.0);
-        Pose {
-            orientation,
-            heading: Quat::from_rotation_y(b.c.yaw),
-            angular_velocity_deg: math::angular_velocity(
-                math::body_orientation(b.prev_yaw, 0.0, 0.0),
-                orientation,
-                dt,
-            ) * (180.0 / std::f32::consts::PI),
-        }
+    fn pose(&self, b: &Flyer, dt: f32) -> Pose {
+        b.pose(dt)
     }
 
-    fn record(&self, _: &Drifter, _: &Pose, _: &mut [f32]) {}
+    fn record(&self, _: &Flyer, _: &Pose, _: &mut [f32]) {}
 }
 
 impl CurlModel {
