@@ -5,7 +5,7 @@
 //! ```text
 //! /<Shot>                          Xform, defaultPrim, kind = "component"
 //!     /<swarm>                     PointInstancer: ids, protoIndices, prototypes, and
-//!                                  time-sampled positions, orientations (quath), scales,
+//!                                  static scales, time-sampled positions, orientations (quath),
 //!                                  velocities (m/s), angularVelocities (deg/s), extent,
 //!                                  and one primvars:<channel> per channel the model
 //!                                  records ("vertex": per instance; a honeybee: pitch,
@@ -62,10 +62,11 @@ enum Attr {
     Primvar(usize),
 }
 
-const FIXED_ATTRS: [Attr; 6] = [
+/// `scales` is not among them: an instance's scale is constant through a shot (the frame
+/// contract), so it is written once, with the static data.
+const FIXED_ATTRS: [Attr; 5] = [
     Attr::Positions,
     Attr::Orientations,
-    Attr::Scales,
     Attr::Velocities,
     Attr::AngularVelocities,
     Attr::Extent,
@@ -283,6 +284,9 @@ pub struct UsdaWriter {
     /// Per swarm: the ids of the first frame (they must not change) and the bound radius
     /// of one prototype at scale 1.
     ids: Vec<Vec<u64>>,
+    /// Per swarm: the scales of the first frame (they must not change either), written
+    /// once as a static attribute.
+    scales: Vec<Vec<f32>>,
     radius: Vec<f32>,
     /// Per swarm: the prototype geometry of its species, one mesh per part.
     proxies: Vec<Vec<ProxyMesh>>,
@@ -344,6 +348,7 @@ impl UsdaWriter {
             clips_dir,
             created_clips_dir,
             ids: Vec::new(),
+            scales: Vec::new(),
             radius,
             proxies,
             first_spill,
@@ -381,6 +386,17 @@ impl UsdaWriter {
                     m.count,
                     m.channels.len()
                 )));
+            }
+            match self.scales.get(k) {
+                None => self.scales.push(s.scale.clone()),
+                Some(first) if *first != s.scale => {
+                    return Err(Error::bake(format!(
+                        "USDA writer: swarm \"{}\" changed an instance's scale at frame {} \
+                         (scales are constant through a shot and written once)",
+                        m.name, frame.frame
+                    )));
+                }
+                Some(_) => {}
             }
             match self.ids.get(k) {
                 None => self.ids.push(s.ids.clone()),
@@ -559,7 +575,7 @@ impl UsdaWriter {
         )
     }
 
-    /// Static instancer data: ids, prototype indices, the prototype relationship.
+    /// Static instancer data: ids, prototype indices, scales, the prototype relationship.
     fn write_static(&self, swarm: usize, out: &mut BufWriter<File>, path: &Path) -> Result<()> {
         let m = &self.meta.swarms[swarm];
         let mut t = Vec::with_capacity(m.count * 12 + 256);
@@ -577,6 +593,29 @@ impl UsdaWriter {
         for i in 0..m.count {
             t.extend_from_slice(if i > 0 { b", 0" } else { b"0" });
         }
+        t.extend_from_slice(b"]\n");
+        // Uniform scales, constant through the shot: formatted like a time sample.
+        let mut scales = Piece {
+            swarm,
+            attr: Attr::Scales,
+            start: 0,
+            end: m.count,
+            text: Vec::with_capacity(m.count * Attr::Scales.bytes_per_instance()),
+            bad: None,
+        };
+        let frame = SwarmFrame {
+            scale: self.scales[swarm].clone(),
+            ..SwarmFrame::default()
+        };
+        scales.format(&frame, 0.0, self.half);
+        if scales.bad.is_some() {
+            return Err(Error::bake(format!(
+                "USDA writer: swarm \"{}\" has a scale that is not finite",
+                m.name
+            )));
+        }
+        t.extend_from_slice(b"        float3[] scales = [");
+        t.extend_from_slice(&scales.text);
         t.extend_from_slice(b"]\n");
         let _ = writeln!(
             Wrap(&mut t),
@@ -1121,9 +1160,11 @@ mod tests {
             t.contains("            1: [0, 1e-7, 2e-7],\n"),
             "sway: shortest, exponent form"
         );
-        assert!(
-            t.contains("            3: [(1, 1, 1), (1.01, 1.01, 1.01), (1.02, 1.02, 1.02)],\n")
-        );
+        // Scales are constant per instance: written once, not sampled.
+        assert!(t.contains(
+            "        float3[] scales = [(1, 1, 1), (1.01, 1.01, 1.01), (1.02, 1.02, 1.02)]\n"
+        ));
+        assert!(!t.contains("scales.timeSamples"));
         assert!(
             !t.contains("NaN") && !t.contains("inf") && !t.contains("-0,") && !t.contains(".0,")
         );
@@ -1205,6 +1246,9 @@ mod tests {
         swapped.ids.swap(0, 1);
         assert!(frame(2, &swapped).is_err(), "ids reordered");
         assert!(frame(2, &swarm_frame(3, 2, 0)).is_err(), "count changed");
+        let mut grown = swarm_frame(2, 2, 0);
+        grown.scale[1] *= 1.5;
+        assert!(frame(2, &grown).is_err(), "a scale changed");
         frame(2, &swarm_frame(2, 2, 0)).unwrap();
         assert!(Box::new(w).finish().is_err(), "frame 3 never came");
         assert!(files(dir.path()).is_empty());

@@ -27,7 +27,8 @@ pub struct SwarmFrame {
     pub heading: Vec<Quat>,
     /// Angular velocity of the body, degrees per second, world frame.
     pub angular_velocity_deg: Vec<Vec3>,
-    /// Uniform scale of the prototype (1 = the swarm's nominal body length).
+    /// Uniform scale of the prototype (1 = the swarm's nominal body length). Constant
+    /// per agent through a shot: the USDA writer writes it once and refuses a change.
     pub scale: Vec<f32>,
     /// The model's channels: one column per entry of `SwarmMeta::channels`, in that order,
     /// each with one value per agent, in the channel's unit.

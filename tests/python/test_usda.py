@@ -118,11 +118,18 @@ def test_one_instancer_per_swarm_with_constant_instances(baked, mode):
         (proto,) = pi.GetPrototypesRel().GetTargets()
         assert proto.HasPrefix(pi.GetPath())
         assert proto == pi.GetPath().AppendPath("Prototypes/honeybee")
-        for attr in (pi.GetPositionsAttr(), pi.GetOrientationsAttr(), pi.GetScalesAttr(),
+        for attr in (pi.GetPositionsAttr(), pi.GetOrientationsAttr(),
                      pi.GetVelocitiesAttr(), pi.GetAngularVelocitiesAttr()):
             assert attr.GetTimeSamples() == list(range(FIRST, LAST + 1)), attr.GetName()
             for t in (FIRST, 17, LAST):
                 assert len(attr.Get(t)) == count
+        # Each bee's scale is constant through the shot: one static value, the same at
+        # every time, uniform on the three axes.
+        scales = pi.GetScalesAttr()
+        assert scales.GetTimeSamples() == []
+        assert len(scales.Get()) == count
+        assert list(scales.Get(FIRST)) == list(scales.Get(LAST))
+        assert all(s[0] == s[1] == s[2] and 0.5 < s[0] < 1.5 for s in scales.Get())
         assert pi.GetOrientationsAttr().GetTypeName() == "quath[]"
         for pv_name in ("pitch", "roll", "sway"):
             pv = UsdGeom.PrimvarsAPI(pi).GetPrimvar(pv_name)
