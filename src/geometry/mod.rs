@@ -58,6 +58,35 @@ fn dir_or(v: Vec3, fallback: Vec3) -> Vec3 {
     if l > 1e-9 { v / l } else { fallback }
 }
 
+/// The point nearest `p`, among a fixed set of candidates on spheres of growing radius
+/// around it (deterministic, no randomness), that lies at least `clearance` outside every
+/// shape; `p` itself when it already does, `None` when nothing within a kilometre does.
+/// For placing a body where overlapping obstacles leave no room at the obvious spot.
+pub fn free_point_near(shapes: &[Shape], p: Vec3, clearance: f32) -> Option<Vec3> {
+    let free = |q: Vec3| shapes.iter().all(|s| signed_distance(s, q) >= clearance);
+    if free(p) {
+        return Some(p);
+    }
+    // 64 directions spread over the sphere (Fibonacci lattice), radii doubling from the
+    // clearance up to a kilometre.
+    const DIRECTIONS: usize = 64;
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    let mut radius = clearance.max(1e-4);
+    while radius < 1000.0 {
+        for k in 0..DIRECTIONS {
+            let y = 1.0 - 2.0 * (k as f32 + 0.5) / DIRECTIONS as f32;
+            let r = (1.0 - y * y).sqrt();
+            let a = golden * k as f32;
+            let q = p + Vec3::new(r * a.cos(), y, r * a.sin()) * radius;
+            if free(q) {
+                return Some(q);
+            }
+        }
+        radius *= 1.5;
+    }
+    None
+}
+
 pub fn signed_distance(shape: &Shape, p: Vec3) -> f32 {
     query(shape, p).distance
 }

@@ -228,13 +228,30 @@ fn start(shot: &Shot, si: usize, k: usize) -> (Start, Rng) {
     let var = s.variation;
     let size = 1.0 + var.size * rng.range(-1.0, 1.0);
     let speed_factor = 1.0 + var.speed * rng.range(-1.0, 1.0);
-    // An agent spawned inside an obstacle starts just outside its surface.
+    // An agent spawned inside an obstacle starts just outside its surface; where
+    // obstacles overlap, pushing it out of one can push it into another, so repeat.
     let r = s.bee.radius * size;
-    for o in &shot.obstacles {
-        let q = geometry::query(&o.shape, pos);
-        if q.distance < r {
-            pos = q.point + q.normal * (r + 1e-3);
+    for _ in 0..8 {
+        let mut moved = false;
+        for o in &shot.obstacles {
+            let q = geometry::query(&o.shape, pos);
+            if q.distance < r {
+                pos = q.point + q.normal * (r + 1e-3);
+                moved = true;
+            }
         }
+        if !moved {
+            break;
+        }
+    }
+    if shot
+        .obstacles
+        .iter()
+        .any(|o| geometry::signed_distance(&o.shape, pos) < r)
+    {
+        // A crevice between overlapping obstacles: the nearest free spot instead.
+        let shapes: Vec<_> = shot.obstacles.iter().map(|o| o.shape).collect();
+        pos = geometry::free_point_near(&shapes, pos, r + 1e-3).unwrap_or(pos);
     }
     let dir = normalize_or(
         Vec3::new(
