@@ -102,7 +102,8 @@ pub fn open_writer(
         Format::Usda => Ok(Box::new(usda::UsdaWriter::create(
             &path,
             meta,
-            opts.usda_clip_frames,
+            opts.usda_clip_frames
+                .unwrap_or_else(|| usda::auto_clip_frames(meta)),
         )?)),
     }
 }

@@ -271,6 +271,29 @@ struct PendingClip {
     start: i32,
 }
 
+/// About how many bytes of samples one instance adds per frame (positions, orientations,
+/// velocities, angular velocities, three bee channels).
+const BYTES_PER_INSTANCE_FRAME: u64 = 190;
+/// A cache up to this size is one file by default; a larger one is split into value clips.
+const ONE_FILE_MAX_BYTES: u64 = 1 << 30;
+/// The size of one default value clip.
+const CLIP_BYTES: u64 = 256 << 20;
+
+/// Frames per value clip when the shot does not say: 0 (one file) for a cache up to
+/// about 1 GiB of samples, else clips of about 256 MiB. Besides opening faster, clips are
+/// written while the bake runs, so a large bake ends without copying gigabytes of samples
+/// after its last frame.
+pub fn auto_clip_frames(meta: &CacheMeta) -> u32 {
+    let instances: u64 = meta.swarms.iter().map(|s| s.count as u64).sum();
+    let per_frame = instances.max(1) * BYTES_PER_INSTANCE_FRAME;
+    let frames = meta.frame_count() as u64;
+    if per_frame * frames <= ONE_FILE_MAX_BYTES {
+        0
+    } else {
+        (CLIP_BYTES / per_frame).clamp(1, frames) as u32
+    }
+}
+
 pub struct UsdaWriter {
     meta: CacheMeta,
     dest: PathBuf,
@@ -1018,6 +1041,17 @@ mod tests {
                 })
                 .collect(),
         }
+    }
+
+    #[test]
+    fn large_caches_default_to_value_clips_of_about_256_mib() {
+        // 10,000 bees × 240 frames ≈ 0.46 GB: one file.
+        assert_eq!(auto_clip_frames(&meta(&[6000, 4000], (1, 240))), 0);
+        // 100,000 × 240 ≈ 4.6 GB: clips of 14 frames (100,000 × 190 B × 14 ≈ 266 MB).
+        let clip = auto_clip_frames(&meta(&[100_000], (1, 240)));
+        assert_eq!(clip, 14);
+        // A huge swarm gets one frame per clip, never 0.
+        assert_eq!(auto_clip_frames(&meta(&[10_000_000], (1, 3))), 1);
     }
 
     /// Deterministic, varied values: negative, tiny, integral, zero.

@@ -55,4 +55,3 @@ pub const OUTPUT_FORMATS: [&str; 2] = ["glb", "usda"];
 /// membrane: what a camera sees of a real beat. A few Hz gives a stylised, readable flap
 /// (see docs/caches.md, glTF).
 pub const WING_FLAP_HZ: f64 = 0.0;
-pub const USDA_CLIP_FRAMES: i64 = 0;

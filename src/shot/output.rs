@@ -41,15 +41,16 @@ impl Format {
 pub struct OutputOptions {
     /// Visible wing flap rate written to glTF wing tracks, Hz. 0 = a static blurred pose.
     pub gltf_wing_flap_hz: f64,
-    /// Split USDA time samples into value clips of this many frames (0 = one file).
-    pub usda_clip_frames: u32,
+    /// Split USDA time samples into value clips of this many frames (0 = one file);
+    /// `None`: chosen from the cache's size (see `export::usda::auto_clip_frames`).
+    pub usda_clip_frames: Option<u32>,
 }
 
 impl Default for OutputOptions {
     fn default() -> Self {
         OutputOptions {
             gltf_wing_flap_hz: 0.0,
-            usda_clip_frames: 0,
+            usda_clip_frames: None,
         }
     }
 }

@@ -427,14 +427,16 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             fps / 2.0
         ),
     )?;
-    let clip = ro.usda_clip_frames.unwrap_or(d::USDA_CLIP_FRAMES);
-    let usda_clip_frames = cx.range(
-        "output.usda_clip_frames",
-        clip as f64,
-        0.0,
-        1e6,
-        "a whole number of frames of at least 0 (0 = no clips)",
-    )? as u32;
+    let usda_clip_frames = match ro.usda_clip_frames {
+        Some(clip) => Some(cx.range(
+            "output.usda_clip_frames",
+            clip as f64,
+            0.0,
+            1e6,
+            "a whole number of frames of at least 0 (0 = no clips)",
+        )? as u32),
+        None => None,
+    };
 
     let shot = Shot {
         name,
