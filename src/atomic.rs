@@ -3,6 +3,17 @@
 //! A bake that fails or is interrupted leaves the previous cache untouched and no partial
 //! file behind: the temporary file is removed on drop unless `commit` ran.
 
+/// Set by the SIGINT/SIGTERM handler; a bake stops within the simulation pass it is in,
+/// or while the writers seal their files, and removes its temporary files, leaving any
+/// previous cache untouched. Here, below the writers, so that a writer's long sealing
+/// step (copying gigabytes into one USDA layer) can stop on it too.
+pub static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether [`INTERRUPTED`] is set.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufWriter, Write};

@@ -5,12 +5,10 @@ use crate::export::{self, CacheWriter, Format};
 use crate::shot::Shot;
 use crate::sim::{Frame, Simulation, SwarmFrame};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-/// Set by the SIGINT/SIGTERM handler; the bake stops at the next frame and removes its
-/// temporary files, leaving any previous cache untouched.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+pub use crate::atomic::INTERRUPTED;
 
 const INTERRUPTED_MESSAGE: &str =
     "interrupted: no cache was written; the previous cache is untouched";
@@ -105,6 +103,7 @@ pub fn bake(
     prepare_out_dir(opts.out_dir)?;
     let start = Instant::now();
     let mut sim = Simulation::new(shot);
+    sim.set_cancel(&INTERRUPTED);
     let meta = sim.meta();
     let mut writers: Vec<Box<dyn CacheWriter>> = Vec::new();
     for &f in opts.formats {
@@ -139,10 +138,19 @@ pub fn bake(
                         }
                     }
                     Message::Done => {
-                        // Seal every file of every format, then rename them all.
+                        // Seal every file of every format, then rename them all. An
+                        // interrupt while sealing (which can take seconds) drops the
+                        // sealed files; the renames themselves take milliseconds and,
+                        // once begun, complete, so the set is never left half replaced.
                         let mut sealed = Vec::new();
                         for w in writers {
+                            if INTERRUPTED.load(Ordering::Relaxed) {
+                                return Err(Error::bake(INTERRUPTED_MESSAGE));
+                            }
                             sealed.extend(w.finish()?);
+                        }
+                        if INTERRUPTED.load(Ordering::Relaxed) {
+                            return Err(Error::bake(INTERRUPTED_MESSAGE));
                         }
                         return crate::atomic::commit_all(sealed);
                     }
@@ -152,8 +160,8 @@ pub fn bake(
         });
         let simulated = with_threads(opts.threads, || -> Result<()> {
             for done in 1..=total {
-                if done > 1 {
-                    sim.advance();
+                if done > 1 && !sim.advance_or_cancel() {
+                    return Err(Error::bake(INTERRUPTED_MESSAGE));
                 }
                 if INTERRUPTED.load(Ordering::Relaxed) {
                     return Err(Error::bake(INTERRUPTED_MESSAGE));

@@ -517,6 +517,11 @@ impl UsdaWriter {
     ) -> Result<()> {
         let m = &self.meta.swarms[swarm];
         for (a, attr) in attrs(m).enumerate() {
+            if crate::atomic::interrupted() {
+                return Err(Error::bake(
+                    "interrupted while writing the USDA layer: no cache was written; the previous cache is untouched",
+                ));
+            }
             let spill = &mut chunk.spills[self.first_spill[swarm] + a];
             spill.w.flush().map_err(io(&spill.scratch.path))?;
             let mut src = File::open(&spill.scratch.path).map_err(io(&spill.scratch.path))?;

@@ -16,6 +16,10 @@ use crate::model::{
 use crate::shot::{Region, Shot};
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The cancel flag of a simulation nobody cancels.
+static NEVER: AtomicBool = AtomicBool::new(false);
 
 /// One swarm's agents and model. Agents are double-buffered: a step reads `agents` and
 /// writes `next`, then the two swap.
@@ -30,23 +34,25 @@ struct Runner<M: Model> {
     values: Vec<f32>,
 }
 
+/// What the gather pass reads of the world.
+#[derive(Clone, Copy)]
+struct Gather<'a> {
+    grid: &'a Grid,
+    agents: &'a [Neighbour],
+    targets: &'a [TargetNow],
+    max_body_radius: f32,
+    cancel: &'a AtomicBool,
+}
+
 /// What the world does with a swarm, whatever its model: one call per swarm per pass.
 trait Swarm: Send + Sync {
     fn len(&self) -> usize;
     /// Writes the agents' neighbour records (pass 0).
     fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32);
     /// Lists each agent's neighbours and runs the model's gather pass (pass 1).
-    fn gather(
-        &self,
-        grid: &Grid,
-        agents: &[Neighbour],
-        targets: &[TargetNow],
-        max_body_radius: f32,
-        lists: &mut [NeighbourList],
-        gathered: &mut [(f32, f32)],
-    );
+    fn gather(&self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]);
     /// Steps every agent into the second buffer and swaps (pass 2).
-    fn step(&mut self, cx: &Context);
+    fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     fn reach(&self) -> f32;
     fn target_particle_spacing(&self) -> Option<f32>;
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
@@ -75,15 +81,14 @@ impl<M: Model> Swarm for Runner<M> {
             });
     }
 
-    fn gather(
-        &self,
-        grid: &Grid,
-        agents: &[Neighbour],
-        targets: &[TargetNow],
-        max_body_radius: f32,
-        lists: &mut [NeighbourList],
-        gathered: &mut [(f32, f32)],
-    ) {
+    fn gather(&self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]) {
+        let Gather {
+            grid,
+            agents,
+            targets,
+            max_body_radius,
+            cancel,
+        } = *w;
         let m = &self.model;
         let start = self.start;
         lists
@@ -92,6 +97,10 @@ impl<M: Model> Swarm for Runner<M> {
             .enumerate()
             .with_min_len(256)
             .for_each(|(k, (list, g))| {
+                // Cancelled: the rest of this pass is skipped (the state is abandoned).
+                if cancel.load(Ordering::Relaxed) {
+                    return;
+                }
                 let i = start + k;
                 let me = &agents[i];
                 let ri = me.radius;
@@ -113,7 +122,7 @@ impl<M: Model> Swarm for Runner<M> {
             });
     }
 
-    fn step(&mut self, cx: &Context) {
+    fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
         let m = &self.model;
         let (agents, start) = (&self.agents, self.start);
         self.next.clear();
@@ -122,7 +131,14 @@ impl<M: Model> Swarm for Runner<M> {
                 .par_iter()
                 .enumerate()
                 .with_min_len(128)
-                .map(|(k, a)| m.step(cx, start + k, a)),
+                .map(|(k, a)| {
+                    // Cancelled: agents are copied, not stepped (the state is abandoned).
+                    if cancel.load(Ordering::Relaxed) {
+                        *a
+                    } else {
+                        m.step(cx, start + k, a)
+                    }
+                }),
         );
         std::mem::swap(&mut self.agents, &mut self.next);
     }
@@ -199,6 +215,8 @@ pub struct Simulation {
     frame: i32,
     step_index: u64,
     record: Vec<SwarmFrame>,
+    /// Set from outside (Ctrl-C) to stop a frame part-way; see [`Simulation::advance_or_cancel`].
+    cancel: &'static AtomicBool,
 }
 
 /// Where agent k of swarm `si` starts, and the random stream its model continues from.
@@ -359,6 +377,7 @@ impl Simulation {
             max_body_radius,
             step_index: 0,
             record: Vec::new(),
+            cancel: &NEVER,
         };
         sim.update_record();
         sim
@@ -440,6 +459,32 @@ impl Simulation {
         self.update_record();
     }
 
+    /// A flag that stops the simulation part-way through a frame once set (a frame of a
+    /// dense 10-million-agent shot can take minutes): see [`Simulation::advance_or_cancel`].
+    pub fn set_cancel(&mut self, flag: &'static AtomicBool) {
+        self.cancel = flag;
+    }
+
+    /// As [`Simulation::advance`], but stops between substeps and within each pass as
+    /// soon as the cancel flag is set; returns false then, and the simulation is no
+    /// longer usable.
+    pub fn advance_or_cancel(&mut self) -> bool {
+        let dt = self.shot.dt() as f32;
+        for k in 0..self.shot.substeps {
+            if self.cancel.load(Ordering::Relaxed) {
+                return false;
+            }
+            let t = self.time() + (k as f64) * self.shot.dt();
+            self.step(t, dt);
+        }
+        if self.cancel.load(Ordering::Relaxed) {
+            return false;
+        }
+        self.frame += 1;
+        self.update_record();
+        true
+    }
+
     fn update_targets(&mut self, t: f64) {
         let frame = self.shot.frame_start as f64 + t * self.shot.fps;
         for (now, target) in self.targets.iter_mut().zip(&self.shot.targets) {
@@ -477,14 +522,14 @@ impl Simulation {
         for swarm in &self.swarms {
             let (l, lr) = std::mem::take(&mut lists).split_at_mut(swarm.len());
             let (g, gr) = std::mem::take(&mut gathered).split_at_mut(swarm.len());
-            swarm.gather(
-                &self.grid,
-                &self.agents,
-                &self.targets,
-                self.max_body_radius,
-                l,
-                g,
-            );
+            let shared = Gather {
+                grid: &self.grid,
+                agents: &self.agents,
+                targets: &self.targets,
+                max_body_radius: self.max_body_radius,
+                cancel: self.cancel,
+            };
+            swarm.gather(&shared, l, g);
             (lists, gathered) = (lr, gr);
         }
         for (a, &(d, p)) in self.agents.iter_mut().zip(&self.gathered) {
@@ -507,7 +552,7 @@ impl Simulation {
             grid: &self.grid,
         };
         for swarm in &mut self.swarms {
-            swarm.step(&cx);
+            swarm.step(&cx, self.cancel);
         }
         self.step_index += 1;
     }

@@ -1,0 +1,73 @@
+//! Ctrl-C (SIGINT) stops a bake in every phase, within a frame too, and leaves the
+//! previous cache as it was with nothing of the interrupted bake behind.
+#![cfg(unix)]
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+
+#[test]
+fn sigint_within_a_long_frame_stops_the_bake_before_that_frame_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    // 100,000 bees in a 1 m box: each frame costs seconds (crowded on purpose).
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 5]\n[[swarm]]\ncount = 100000\nspawn = { size = [1, 1, 1] }\n",
+    )
+    .unwrap();
+    std::fs::create_dir(p.join("out")).unwrap();
+    std::fs::write(p.join("out/shot.tracks.csv"), "the previous cache\n").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args(["bake", "shot.toml", "--format", "csv", "--progress", "json"])
+        .current_dir(p)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    assert!(first.contains("\"frame\":1"), "{first}");
+    // Frame 1 is the initial state; frame 2 is being simulated now.
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let rest: Vec<String> = lines.map(|l| l.unwrap()).collect();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    assert!(
+        rest.iter().all(|l| !l.contains("\"frame\":2")),
+        "the frame under way was not finished first: {rest:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(p.join("out/shot.tracks.csv")).unwrap(),
+        "the previous cache\n"
+    );
+    let left: Vec<_> = std::fs::read_dir(p.join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["shot.tracks.csv"], "nothing else left behind");
+}
+
+#[test]
+fn a_cancelled_simulation_stops_without_advancing() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static CANCEL: AtomicBool = AtomicBool::new(false);
+    let shot = beeswarm::shot::parse(
+        "[scene]\nframes = [1, 10]\n[[swarm]]\ncount = 50\n",
+        std::path::Path::new("t.toml"),
+        std::path::Path::new("."),
+    )
+    .unwrap();
+    let mut sim = beeswarm::sim::Simulation::new(&shot);
+    sim.set_cancel(&CANCEL);
+    assert!(sim.advance_or_cancel(), "runs while the flag is clear");
+    assert_eq!(sim.frame(), 2);
+    CANCEL.store(true, Ordering::Relaxed);
+    assert!(!sim.advance_or_cancel(), "stops once it is set");
+    assert_eq!(sim.frame(), 2, "and does not count the abandoned frame");
+}
