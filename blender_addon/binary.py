@@ -1,9 +1,11 @@
 """Finding the `beeswarm` binary: the add-on's preference when set, else PATH, else a
 `target/release/beeswarm` (or `target/debug/`) in the repository the add-on sits in,
 searched upwards from the add-on's folder."""
+import json
 import os
 import pathlib
 import shutil
+import subprocess
 import time
 
 EXE = "beeswarm.exe" if os.name == "nt" else "beeswarm"
@@ -54,3 +56,58 @@ def resolve(explicit=""):
         return found, f"beeswarm: {found}"
     return None, ("No beeswarm binary found: put it on PATH, build it with "
                   "`cargo build --release`, or set its path in the add-on's preferences")
+
+
+# The models a binary too old to list them (no `models` subcommand) or a missing binary
+# leaves: the bee model with Table I's presets, as `beeswarm models --json` describes it.
+FALLBACK_MODELS = {
+    "models": [{
+        "name": "bee",
+        "summary": "Paper 000, Chen et al.: body oscillation, visual obstacle avoidance with "
+                   "roll, curl-noise flight and SPH repulsion (Eq. 1)",
+        "default_preset": "nest",
+        "presets": [
+            {"name": "nest", "doc": "Table I \"around nest\" (350 bees): the defaults"},
+            {"name": "grassland", "doc": "Table I \"over grassland\" (1000 bees)"},
+            {"name": "optimized", "doc": "Table I \"optimized values\""},
+        ],
+        "params": [],
+        "channels": [],
+    }]
+}
+_models_cache = {}
+
+
+def models(explicit=""):
+    """(document, reason): the binary's `beeswarm models --json`, or the built-in bee-only
+    list and why. Cached per binary path and modification time: Blender asks for menu
+    items on every redraw, and a subprocess per redraw would stall the UI."""
+    path, msg = resolve(explicit)
+    if path is None:
+        return FALLBACK_MODELS, msg
+    try:
+        key = (str(path), path.stat().st_mtime_ns)
+    except OSError as e:
+        return FALLBACK_MODELS, f"Cannot read {path}: {e}"
+    if key in _models_cache:
+        return _models_cache[key]
+    try:
+        run = subprocess.run([str(path), "models", "--json"], capture_output=True,
+                             text=True, timeout=20)
+        if run.returncode != 0:
+            last = (run.stderr.strip().splitlines() or [f"exit code {run.returncode}"])[-1]
+            raise RuntimeError(last)
+        doc = json.loads(run.stdout)
+        if not doc.get("models") or not all(m.get("presets") for m in doc["models"]):
+            raise RuntimeError("it listed no models")
+        result = (doc, "")
+    except (OSError, subprocess.SubprocessError, ValueError, RuntimeError) as e:
+        result = (FALLBACK_MODELS,
+                  f"{path.name} could not list its models ({e}); offering the bee model only")
+    _models_cache[key] = result
+    return result
+
+
+def model_info(doc, name):
+    """The entry of model `name` in a models document, or None."""
+    return next((m for m in doc["models"] if m["name"] == name), None)

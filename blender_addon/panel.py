@@ -35,6 +35,15 @@ class BEESWARM_PT_panel(bpy.types.Panel):
             col.prop(s, "swarm_name")
             col = layout.column(align=True)
             col.prop(s, "count")
+            col.prop(s, "model")
+            doc, reason = props.models_doc(context)
+            info = binary.model_info(doc, s.model)
+            if reason and path is not None:
+                for line in _wrap(reason, 40):
+                    col.label(text=line, icon="INFO")
+            elif info:
+                for line in _wrap(info["summary"], 40):
+                    col.label(text=line)
             col.prop(s, "preset")
             if s.preset == "FILE":
                 col.prop(s, "preset_file")

@@ -5,12 +5,44 @@ from bpy.props import (BoolProperty, EnumProperty, FloatVectorProperty, IntPrope
 
 from . import binary
 
-PRESETS = [
-    ("nest", "Nest", "Bees loitering at a hive entrance"),
-    ("grassland", "Grassland", "Foraging flight over open ground"),
-    ("optimized", "Optimized", "The calibrated preset"),
-    ("FILE", "Preset File", "A preset .toml written by `beeswarm calibrate`"),
-]
+PRESET_FILE = ("FILE", "Preset File", "A preset .toml written by `beeswarm calibrate`")
+
+# Blender keeps only pointers to the strings of dynamic enum items: the lists must stay
+# referenced from Python, or the menu shows garbage.
+_items = {}
+
+
+def _title(name):
+    return name.replace("_", " ").title()
+
+
+def models_doc(context):
+    """The models document of the binary in use (see binary.models) and the reason when it
+    is the built-in fallback."""
+    return binary.models(preference_binary(context))
+
+
+def model_items(self, context):
+    doc, _ = models_doc(context)
+    items = [(m["name"], _title(m["name"]), m["summary"]) for m in doc["models"]]
+    _items["models"] = items
+    return items
+
+
+def preset_items(self, context):
+    doc, _ = models_doc(context)
+    m = binary.model_info(doc, self.model) or doc["models"][0]
+    items = [(p["name"], _title(p["name"]), p["doc"]) for p in m["presets"]] + [PRESET_FILE]
+    _items[("presets", m["name"])] = items
+    return items
+
+
+def _model_changed(self, context):
+    # A new model starts from its own default preset (its first), whichever was chosen.
+    doc, _ = models_doc(context)
+    m = binary.model_info(doc, self.model)
+    if m:
+        self.preset = m["presets"][0]["name"]
 
 FORMATS = [
     ("USD", "USD", "Bake a USDA PointInstancer and import it"),
@@ -64,7 +96,10 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
     swarm_name: StringProperty(name="Swarm", default="bees")
     count: IntProperty(name="Count", default=200, min=0, soft_max=20000,
                        description="Number of bees")
-    preset: EnumProperty(name="Preset", items=PRESETS, default="nest")
+    model: EnumProperty(name="Model", items=model_items, update=_model_changed,
+                        description="How the swarm flies (the binary's `beeswarm models`)")
+    preset: EnumProperty(name="Preset", items=preset_items,
+                         description="The model's parameters to start from")
     preset_file: StringProperty(name="Preset File", subtype="FILE_PATH", default="")
     seed: IntProperty(name="Seed", default=1, min=0)
     substeps: IntProperty(name="Substeps", default=4, min=1, max=64)

@@ -266,14 +266,21 @@ def build_shot(scene, settings, name=None):
     if frames[1] < frames[0]:
         raise ShotBuildError(f"The scene's frame range is reversed ({frames[0]}–{frames[1]})")
     shot_name = safe_name(name or settings.shot_name or "beeswarm")
+    # A menu whose stored choice no longer exists (another binary) reads as "".
+    model = settings.model or "bee"
+    preset = settings.preset
+    if preset == "FILE":
+        if not settings.preset_file:
+            raise ShotBuildError("Choose a preset file, or a built-in preset")
+        preset = settings.preset_file
+    elif not preset:
+        raise ShotBuildError(f"Choose a preset of the {model} model")
     swarm = {
         "name": safe_name(settings.swarm_name or "bees", "bees", identifier=True),
         "count": int(settings.count),
-        "model": "bee",
-        "preset": settings.preset if settings.preset != "FILE" else settings.preset_file,
+        "model": model,
+        "preset": preset,
     }
-    if settings.preset == "FILE" and not settings.preset_file:
-        raise ShotBuildError("Choose a preset file, or a built-in preset")
     # Spawn region: an object's world bounds, else the panel's centre and size.
     sp = settings.spawn_object
     if sp is not None:

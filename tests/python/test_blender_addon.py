@@ -3,6 +3,7 @@
 Run with the venv that has bpy 5.0.1:
     BEESWARM_BIN=target/release/beeswarm python -m pytest tests/python/test_blender_addon.py
 """
+import json
 import math
 import os
 import pathlib
@@ -23,7 +24,7 @@ from conftest import ROOT, read_tracks  # noqa: E402
 
 sys.path.insert(0, str(ROOT))
 import blender_addon  # noqa: E402
-from blender_addon import binary, importer, runner, shot_builder  # noqa: E402
+from blender_addon import binary, importer, props, runner, shot_builder  # noqa: E402
 
 TOL = 1e-4  # metres
 
@@ -271,6 +272,81 @@ def test_binary_discovery(tmp_path, monkeypatch):
     assert binary.discover(addon_dir, use_cache=False) == on_path
     assert binary.resolve(str(tmp_path / "missing"))[0] is None
     assert binary.resolve(str(exe))[0] == exe
+
+
+# ---------------------------------------------------------------------------------------
+# Model and preset menus, from `beeswarm models --json`
+
+@pytest.fixture
+def with_binary(monkeypatch, beeswarm_bin):
+    """The add-on finds the real binary (as on PATH), with a fresh models cache."""
+    monkeypatch.setattr(binary, "discover", lambda *a, **k: pathlib.Path(beeswarm_bin))
+    monkeypatch.setattr(binary, "_models_cache", {})
+    return beeswarm_bin
+
+
+def names(items):
+    return [i[0] for i in items]
+
+
+def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
+    s = scene.beeswarm
+    assert names(props.model_items(s, bpy.context)) == ["bee", "curl", "brownian", "boids"]
+    expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
+                                         text=True, check=True).stdout)
+    for m in expected["models"]:
+        s.model = m["name"]
+        # Each model's own presets, then a preset file; switching starts at its default.
+        assert names(props.preset_items(s, bpy.context)) == \
+            [p["name"] for p in m["presets"]] + ["FILE"]
+        assert s.preset == m["presets"][0]["name"]
+    s.model = "bee"
+    s.preset = "grassland"
+    log = draw_panel(bpy.context)
+    assert ("prop", "model") in log and ("prop", "preset") in log
+    text = " ".join(t for kind, t in log if kind == "label")
+    assert "Paper 000" in text, text
+
+
+def test_a_curl_swarm_built_from_the_scene_passes_check_and_bakes(scene, with_binary, tmp_path):
+    shot_cylinder_scene(scene)
+    s = scene.beeswarm
+    s.model = "curl"
+    assert s.preset == "default"
+    shot, _ = shot_builder.build_shot(scene, s)
+    assert (shot["swarm"][0]["model"], shot["swarm"][0]["preset"]) == ("curl", "default")
+    path = tmp_path / "curl.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot, "test"))
+    r = subprocess.run([with_binary, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "model curl, preset default" in r.stdout
+    assert run_bake(with_binary, "USD") == {"FINISHED"}
+    assert len(shot_collections("bltest")) == 1
+
+
+def test_model_menu_falls_back_to_the_bee_model_and_says_why(scene, tmp_path, monkeypatch):
+    monkeypatch.setattr(binary, "_models_cache", {})
+    doc, reason = binary.models(str(tmp_path / "missing" / "beeswarm"))
+    assert names(props.model_items(scene.beeswarm, bpy.context)) and doc is binary.FALLBACK_MODELS
+    assert "No beeswarm binary" in reason
+    # A binary without the `models` subcommand (an older build): the bee model, and why.
+    old = tmp_path / "old" / binary.EXE
+    old.parent.mkdir()
+    old.write_text("#!/bin/sh\necho \"error: unrecognized subcommand 'models'\" >&2\nexit 2\n")
+    old.chmod(0o755)
+    doc, reason = binary.models(str(old))
+    assert [m["name"] for m in doc["models"]] == ["bee"]
+    assert "could not list its models" in reason and "unrecognized subcommand" in reason
+
+
+def test_models_are_asked_once_per_binary(with_binary, monkeypatch):
+    calls = []
+    real = subprocess.run
+    monkeypatch.setattr(binary.subprocess, "run", lambda *a, **k: calls.append(a) or real(*a, **k))
+    for _ in range(5):
+        doc, reason = binary.models(with_binary)
+        assert reason == "" and len(doc["models"]) == 4
+    assert len(calls) == 1, "the menu callbacks run on every redraw: one query per binary"
 
 
 # ---------------------------------------------------------------------------------------
