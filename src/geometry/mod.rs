@@ -58,6 +58,25 @@ fn dir_or(v: Vec3, fallback: Vec3) -> Vec3 {
     if l > 1e-9 { v / l } else { fallback }
 }
 
+/// `n` unit directions spread evenly over the sphere (a Fibonacci lattice).
+pub fn fibonacci_sphere(n: usize) -> impl Iterator<Item = Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n).map(move |i| {
+        let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+        let r = (1.0 - y * y).max(0.0).sqrt();
+        let a = golden * i as f32;
+        Vec3::new(r * a.cos(), y, r * a.sin())
+    })
+}
+
+/// Points evenly spread on a sphere about `spacing` apart (12 to 2,000 of them): the
+/// static virtual particles that sample a target's body (paper 000 Sec. V-B).
+pub fn sphere_samples(center: Vec3, radius: f32, spacing: f32) -> Vec<Vec3> {
+    let area = 4.0 * std::f32::consts::PI * radius * radius;
+    let n = ((area / (spacing * spacing)).ceil() as usize).clamp(12, 2000);
+    fibonacci_sphere(n).map(|d| center + d * radius).collect()
+}
+
 /// The point nearest `p`, among a fixed set of candidates on spheres of growing radius
 /// around it (deterministic, no randomness), that lies at least `clearance` outside every
 /// shape; `p` itself when it already does, `None` when nothing within a kilometre does.
@@ -67,20 +86,12 @@ pub fn free_point_near(shapes: &[Shape], p: Vec3, clearance: f32) -> Option<Vec3
     if free(p) {
         return Some(p);
     }
-    // 64 directions spread over the sphere (Fibonacci lattice), radii doubling from the
-    // clearance up to a kilometre.
-    const DIRECTIONS: usize = 64;
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    // 64 directions spread over the sphere, radii growing from the clearance up to a
+    // kilometre.
     let mut radius = clearance.max(1e-4);
     while radius < 1000.0 {
-        for k in 0..DIRECTIONS {
-            let y = 1.0 - 2.0 * (k as f32 + 0.5) / DIRECTIONS as f32;
-            let r = (1.0 - y * y).sqrt();
-            let a = golden * k as f32;
-            let q = p + Vec3::new(r * a.cos(), y, r * a.sin()) * radius;
-            if free(q) {
-                return Some(q);
-            }
+        if let Some(q) = fibonacci_sphere(64).map(|d| p + d * radius).find(|q| free(*q)) {
+            return Some(q);
         }
         radius *= 1.5;
     }
@@ -224,6 +235,16 @@ fn cylinder_local(p: Vec3, radius: f32, hh: f32) -> SurfaceQuery {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sphere_samples_lie_on_the_sphere() {
+        let s = sphere_samples(Vec3::ONE, 0.1, 0.03);
+        assert!(s.len() >= 12);
+        assert!(
+            s.iter()
+                .all(|p| ((*p - Vec3::ONE).length() - 0.1).abs() < 1e-5)
+        );
+    }
     use glam::Quat;
 
     fn check_consistent(shape: &Shape, p: Vec3) {

@@ -8,7 +8,6 @@
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
 use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
-use crate::model::bee::repulsion;
 use crate::model::context::NeighbourList;
 use crate::model::{
     Agent, Context, Model, Neighbour, Pose, Start, SwarmSetup, TargetNow, with_model,
@@ -347,7 +346,7 @@ impl Simulation {
                 reach: t.reach,
                 radius: t.radius,
                 particles: if t.kind.has_body() && spacing.is_finite() {
-                    repulsion::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
+                    geometry::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
                 } else {
                     Vec::new()
                 },

@@ -54,22 +54,6 @@ pub fn pressure_term(
     dir * (k.spiky_grad_mag(s) * mass_j * (p_i + p_j) / (2.0 * rho_i * rho_j))
 }
 
-/// Points evenly spread on a sphere (Fibonacci lattice): the static virtual particles that
-/// sample a target's body so approaching bees are pushed back (Sec. V-B).
-pub fn sphere_samples(center: Vec3, radius: f32, spacing: f32) -> Vec<Vec3> {
-    let area = 4.0 * std::f32::consts::PI * radius * radius;
-    let n = ((area / (spacing * spacing)).ceil() as usize).clamp(12, 2000);
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    (0..n)
-        .map(|i| {
-            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
-            let r = (1.0 - y * y).max(0.0).sqrt();
-            let a = golden * i as f32;
-            center + Vec3::new(r * a.cos(), y, r * a.sin()) * radius
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,13 +74,4 @@ mod tests {
         assert!(a0.is_finite() && a0.y > 0.0);
     }
 
-    #[test]
-    fn sphere_samples_lie_on_the_sphere() {
-        let s = sphere_samples(Vec3::ONE, 0.1, 0.03);
-        assert!(s.len() >= 12);
-        assert!(
-            s.iter()
-                .all(|p| ((*p - Vec3::ONE).length() - 0.1).abs() < 1e-5)
-        );
-    }
 }
