@@ -37,7 +37,10 @@ impl AtomicFile {
             .ok_or_else(|| Error::bake(format!("not a file path: {}", dest.display())))?
             .to_string_lossy()
             .into_owned();
-        let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        // The name is checked (a file path), but not embedded: temporary names are ours
+        // alone, whatever the user named the shot.
+        let _ = name;
+        let tmp = temp_path(dir);
         let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         Ok(AtomicFile {
             tmp,
@@ -166,14 +169,58 @@ pub struct ScratchFile {
 }
 
 impl ScratchFile {
+    /// A scratch file's path in `dir` (nothing is created). `tag` says what it is for, in
+    /// messages only: the name on disk never embeds a user's names.
     pub fn new(dir: &Path, tag: &str) -> Self {
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let n = N.fetch_add(1, Ordering::Relaxed);
+        let _ = tag;
         ScratchFile {
-            path: dir.join(format!(".{tag}.{}.{n}.scratch.tmp", std::process::id())),
+            path: temp_path(dir),
         }
     }
+}
+
+/// Every temporary file of ours is `.beeswarm-<pid>-<n>.tmp`: recognisable, short
+/// whatever the shot and swarm names, and telling which process owns it.
+fn temp_path(dir: &Path) -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let n = N.fetch_add(1, Ordering::Relaxed);
+    dir.join(format!(".beeswarm-{}-{n}.tmp", std::process::id()))
+}
+
+/// The owning process id of one of our temporary files, from its name.
+fn temp_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(".beeswarm-")?.strip_suffix(".tmp")?;
+    let (pid, n) = rest.split_once('-')?;
+    n.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` is running. Where that cannot be known (no /proc), every
+/// process counts as running, so nothing of a live bake is ever removed.
+fn alive(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    !proc.is_dir() || proc.join(pid.to_string()).exists()
+}
+
+/// Removes the temporary files that bakes killed before they could clean up (`kill -9`,
+/// out of memory, a power cut) left in `dir`: ours by name, owned by a process that is no
+/// longer running. Another live bake's files are never touched. Returns how many went.
+pub fn remove_stale_temporaries(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name.to_str().and_then(temp_owner) else {
+            continue;
+        };
+        if pid != std::process::id() && !alive(pid) && std::fs::remove_file(e.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
 }
 
 impl ScratchFile {
@@ -206,6 +253,33 @@ impl Drop for ScratchFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        // Above Linux's largest pid (4,194,304): no such process runs.
+        let dead = ".beeswarm-4194305-7.tmp";
+        let mine = format!(".beeswarm-{}-0.tmp", std::process::id());
+        let user = ".hive.usda.4194305.tmp"; // not ours by name
+        for f in [dead, mine.as_str(), user, "hive.usda"] {
+            std::fs::write(p.join(f), "x").unwrap();
+        }
+        let removed = remove_stale_temporaries(p);
+        let mut left: Vec<String> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        if Path::new("/proc").is_dir() {
+            assert_eq!(removed, 1);
+            assert!(!left.contains(&dead.to_owned()), "{left:?}");
+        }
+        assert!(left.contains(&mine) && left.contains(&user.to_owned()));
+        assert!(left.contains(&"hive.usda".to_owned()));
+        assert_eq!(temp_owner(".beeswarm-12-3.tmp"), Some(12));
+        assert_eq!(temp_owner(".beeswarm-x-3.tmp"), None);
+    }
 
     #[test]
     fn dropped_file_leaves_previous_content_and_no_temp() {

@@ -41,6 +41,8 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
             dir.display()
         ))
     })?;
+    // What bakes killed outright (kill -9, out of memory) left here goes first.
+    crate::atomic::remove_stale_temporaries(dir);
     let probe = crate::atomic::ScratchFile::new(dir, "write-probe");
     std::fs::write(&probe.path, b"").map_err(|e| {
         Error::input(format!(

@@ -71,3 +71,71 @@ fn a_cancelled_simulation_stops_without_advancing() {
     assert!(!sim.advance_or_cancel(), "stops once it is set");
     assert_eq!(sim.frame(), 2, "and does not count the abandoned frame");
 }
+
+#[test]
+fn the_next_bake_removes_what_a_killed_bake_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 400]\n[[swarm]]\ncount = 3000\n",
+    )
+    .unwrap();
+    let temporaries = || -> Vec<String> {
+        std::fs::read_dir(p.join("out"))
+            .map(|d| {
+                d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.starts_with(".beeswarm-") && n.ends_with(".tmp"))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args([
+            "bake",
+            "shot.toml",
+            "--format",
+            "glb,usda,csv",
+            "--progress",
+            "json",
+        ])
+        .current_dir(p)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    for _ in 0..5 {
+        lines.next().unwrap().unwrap();
+    }
+    // kill -9: no handler runs, nothing is cleaned up.
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left = temporaries();
+    assert!(!left.is_empty(), "a killed bake leaves its temporary files");
+    // Every name is ours and none embeds the shot's name.
+    assert!(left.iter().all(|n| !n.contains("shot")), "{left:?}");
+    std::fs::write(
+        p.join("small.toml"),
+        "[scene]\nframes = [1, 3]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args([
+            "bake",
+            "small.toml",
+            "--format",
+            "csv",
+            "--progress",
+            "none",
+        ])
+        .current_dir(p)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert_eq!(
+        temporaries(),
+        Vec::<String>::new(),
+        "the next bake removed them"
+    );
+}

@@ -358,6 +358,8 @@ impl UsdaWriter {
         }
         let clips_dir = dir.join(format!("{}.clips", meta.shot_name));
         let mut created_clips_dir = false;
+        // What a bake killed outright left among the clips goes first.
+        crate::atomic::remove_stale_temporaries(&clips_dir);
         if clip_frames > 0 && !clips_dir.is_dir() {
             std::fs::create_dir_all(&clips_dir).map_err(io(&clips_dir))?;
             created_clips_dir = true;

@@ -90,7 +90,10 @@ pub fn free_point_near(shapes: &[Shape], p: Vec3, clearance: f32) -> Option<Vec3
     // kilometre.
     let mut radius = clearance.max(1e-4);
     while radius < 1000.0 {
-        if let Some(q) = fibonacci_sphere(64).map(|d| p + d * radius).find(|q| free(*q)) {
+        if let Some(q) = fibonacci_sphere(64)
+            .map(|d| p + d * radius)
+            .find(|q| free(*q))
+        {
             return Some(q);
         }
         radius *= 1.5;

@@ -73,5 +73,4 @@ mod tests {
         let a0 = pressure_term(&k, Vec3::ZERO, 0.0, 0.004, m, p, p, rho, rho, || Vec3::Y);
         assert!(a0.is_finite() && a0.y > 0.0);
     }
-
 }
