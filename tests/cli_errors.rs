@@ -1073,3 +1073,35 @@ fn check_refuses_what_bake_would_fail_on() {
         "the documented limit itself is valid"
     );
 }
+
+#[test]
+fn check_refuses_an_output_folder_bake_could_not_use() {
+    let err = refuse("[[swarm]]\ncount = 3\n[output]\ndir = \"a\\u0000b\"\n");
+    assert_says(&err, &["key `output.dir`", "holding a NUL character"]);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("afile"), "").unwrap();
+    for (out, says) in [
+        ("afile", "is a file, not a folder"),
+        ("afile/deeper", "is a file, not a folder"),
+        (
+            "/proc/beeswarm-test",
+            "cannot create the output folder /proc/beeswarm-test",
+        ),
+    ] {
+        if out.starts_with("/proc") && !Path::new("/proc").is_dir() {
+            continue;
+        }
+        std::fs::write(
+            p.join("shot.toml"),
+            format!("[[swarm]]\ncount = 3\n[output]\ndir = \"{out}\"\n"),
+        )
+        .unwrap();
+        for cmd in ["check", "bake"] {
+            let run = beeswarm(p, &[cmd, "shot.toml"]);
+            assert_eq!(run.code, 2, "{cmd} {out}: {}", run.stderr);
+            assert_says(&run.stderr, &[says]);
+        }
+    }
+    assert_only(p, &["afile", "shot.toml"]);
+}

@@ -107,7 +107,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
 
 /// Refuses an output folder that is, or lies under, a regular file, naming the file (the
 /// system's "File exists" / "Not a directory" do not say which one is in the way).
-fn check_out_dir(dir: &Path, from_option: bool) -> Result<()> {
+pub(crate) fn check_out_dir(dir: &Path, from_option: bool) -> Result<()> {
     let source = if from_option {
         "--out"
     } else {
@@ -128,6 +128,44 @@ fn check_out_dir(dir: &Path, from_option: bool) -> Result<()> {
             dir.display(),
             file.display()
         ))),
-        None => Ok(()),
+        None => writable_ancestor(dir, source),
+    }
+}
+
+/// The nearest existing folder above `dir` must let us create folders and files in it
+/// (a bake creates the rest of the path). Tested by creating and removing an empty probe
+/// folder there, which `check` may do without leaving a trace.
+fn writable_ancestor(dir: &Path, source: &str) -> Result<()> {
+    let Some(existing) = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .find(|p| p.is_dir())
+    else {
+        return Ok(()); // relative to the working folder, which exists
+    };
+    if existing == dir {
+        let probe = existing.join(format!(".beeswarm-{}-probe.tmp", std::process::id()));
+        return match std::fs::File::create(&probe) {
+            Ok(_) => {
+                let _ = std::fs::remove_file(&probe);
+                Ok(())
+            }
+            Err(e) => Err(Error::input(format!(
+                "the output folder {} ({source}) is not writable: {e}",
+                dir.display()
+            ))),
+        };
+    }
+    let probe = existing.join(format!(".beeswarm-{}-probe.tmp", std::process::id()));
+    match std::fs::create_dir(&probe) {
+        Ok(()) => {
+            let _ = std::fs::remove_dir(&probe);
+            Ok(())
+        }
+        Err(e) => Err(Error::input(format!(
+            "cannot create the output folder {} ({source}) in {}: {e}",
+            dir.display(),
+            existing.display()
+        ))),
     }
 }

@@ -17,6 +17,8 @@ pub struct CheckArgs {
 
 pub fn run(a: CheckArgs) -> Result<()> {
     let shot = crate::shot::load(&a.shot)?;
+    // Whatever would stop a bake before it starts stops the check too.
+    super::bake::check_out_dir(&shot.output.dir, false)?;
     crate::progress::stdout(&summary(&shot));
     Ok(())
 }

@@ -398,6 +398,12 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             "expected a folder path, found an empty string",
         ));
     }
+    if dir.contains('\0') {
+        return Err(cx.err(
+            "output.dir",
+            "expected a folder path, found one holding a NUL character",
+        ));
+    }
     let mut formats = Vec::new();
     let names: Vec<String> = ro
         .formats
