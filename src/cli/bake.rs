@@ -42,37 +42,66 @@ pub struct BakeArgs {
     pub preview: bool,
 }
 
+/// A shot with the command line's overrides applied, and where and what it bakes: what
+/// `bake` runs and `check` reports.
+pub struct Plan {
+    pub shot: crate::shot::Shot,
+    pub out_dir: PathBuf,
+    pub formats: Vec<Format>,
+    pub preview: bool,
+}
+
+impl BakeArgs {
+    /// The plan these options make of `shot`, refused (exit 2) where a bake could not
+    /// start: too many threads, an output folder that cannot be made.
+    pub fn plan(&self, mut shot: crate::shot::Shot) -> Result<Plan> {
+        if let Some(seed) = self.seed {
+            shot.seed = seed;
+        }
+        if let Some((s, e)) = self.frames {
+            shot.frame_start = s;
+            shot.frame_end = e;
+        }
+        crate::bake::check_threads(self.threads)?;
+        let out_dir = self.out.clone().unwrap_or_else(|| shot.output.dir.clone());
+        check_out_dir(&out_dir, self.out.is_some())?;
+        let formats = if self.format.is_empty() {
+            shot.output.formats.clone()
+        } else {
+            // `--format csv,CSV` names one writer, not two writing the same file.
+            let mut unique: Vec<Format> = Vec::new();
+            for f in &self.format {
+                if !unique.contains(f) {
+                    unique.push(*f);
+                }
+            }
+            unique
+        };
+        let preview = self.preview || shot.output.preview;
+        Ok(Plan {
+            shot,
+            out_dir,
+            formats,
+            preview,
+        })
+    }
+}
+
 pub fn run(a: BakeArgs) -> Result<()> {
-    let mut shot = match &a.shot {
+    let shot = match &a.shot {
         Some(p) => crate::shot::load(p)?,
         None => crate::shot::embedded_default(),
     };
-    if let Some(seed) = a.seed {
-        shot.seed = seed;
-    }
-    if let Some((s, e)) = a.frames {
-        shot.frame_start = s;
-        shot.frame_end = e;
-    }
-    crate::bake::check_threads(a.threads)?;
-    let out_dir = a.out.clone().unwrap_or_else(|| shot.output.dir.clone());
-    check_out_dir(&out_dir, a.out.is_some())?;
-    let formats = if a.format.is_empty() {
-        shot.output.formats.clone()
-    } else {
-        // `--format csv,CSV` names one writer, not two writing the same file.
-        let mut unique: Vec<Format> = Vec::new();
-        for f in &a.format {
-            if !unique.contains(f) {
-                unique.push(*f);
-            }
-        }
-        unique
-    };
+    let Plan {
+        shot,
+        out_dir,
+        formats,
+        preview,
+    } = a.plan(shot)?;
     let opts = BakeOptions {
         out_dir: &out_dir,
         formats: &formats,
-        preview: a.preview || shot.output.preview,
+        preview,
         threads: a.threads,
     };
 

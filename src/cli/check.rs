@@ -1,26 +1,177 @@
 //! `beeswarm check`: validate a shot and say what a bake would produce.
 
 use crate::error::Result;
+use crate::export::Format;
 use crate::shot::{Region, Shape, Shot, Swarm, defaults};
 use clap::Args;
-use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 #[command(
-    about = "Validate a shot and report what it would produce",
-    after_help = "Example:\n  beeswarm check examples/nest.toml"
+    about = "Validate a shot and report what a bake would do (a dry run: takes every bake option)",
+    after_help = "Examples:\n  beeswarm check examples/nest.toml\n  beeswarm check shot.toml --frames 1:48 --format usda,csv --out caches"
 )]
 pub struct CheckArgs {
-    /// The shot file (TOML).
-    pub shot: PathBuf,
+    /// The same options as `bake` (the shot file is required here).
+    #[command(flatten)]
+    pub bake: super::bake::BakeArgs,
 }
 
 pub fn run(a: CheckArgs) -> Result<()> {
-    let shot = crate::shot::load(&a.shot)?;
+    let Some(path) = &a.bake.shot else {
+        return Err(crate::error::Error::input(
+            "check needs a shot file: beeswarm check shot.toml",
+        ));
+    };
+    let shot = crate::shot::load(path)?;
     // Whatever would stop a bake before it starts stops the check too.
-    super::bake::check_out_dir(&shot.output.dir, false)?;
-    crate::progress::stdout(&summary(&shot));
+    let plan = a.bake.plan(shot)?;
+    let mut text = summary(&plan.shot);
+    text += &dry_run(&plan);
+    crate::progress::stdout(&text);
     Ok(())
+}
+
+/// Bytes per bee and frame of each cache, measured on `examples/grassland.toml` (1,000
+/// bees of the bee model, 240 frames): glTF 62 (plus 1.4 kB of JSON per bee), USDA 180,
+/// CSV 163. Models without channels write a little less.
+const GLTF_BYTES: f64 = 62.0;
+const GLTF_JSON_PER_BEE: f64 = 1400.0;
+const USDA_BYTES: f64 = 180.0;
+const CSV_BYTES: f64 = 163.0;
+
+/// What a bake of the plan would write and replace, and the time, memory and disk it
+/// would take (estimates; the time from a short run of a smaller copy of the shot).
+fn dry_run(plan: &super::bake::Plan) -> String {
+    use std::fmt::Write;
+    let shot = &plan.shot;
+    let (bees, frames) = (shot.bee_count() as f64, shot.frame_count() as f64);
+    let bee_frames = bees * frames;
+    let mut s = String::new();
+    let mut files: Vec<(String, f64)> = Vec::new();
+    let mut scratch = 0.0;
+    for f in &plan.formats {
+        let name = f.file_name(&shot.name);
+        match f {
+            Format::Glb => {
+                files.push((name, bee_frames * GLTF_BYTES + bees * GLTF_JSON_PER_BEE));
+                scratch += bee_frames * 52.0;
+            }
+            Format::Gltf => {
+                files.push((name, bees * GLTF_JSON_PER_BEE));
+                files.push((format!("{}.bin", shot.name), bee_frames * GLTF_BYTES));
+                scratch += bee_frames * 52.0;
+            }
+            Format::Usda => {
+                let size = bee_frames * USDA_BYTES;
+                let clip = shot.output.options.usda_clip_frames.unwrap_or_else(|| {
+                    crate::export::usda::clip_frames_for(bees as u64, frames as u64)
+                });
+                if clip > 0 {
+                    let clips = (frames / clip as f64).ceil();
+                    files.push((
+                        format!(
+                            "{name} + {}.clips/ ({clips} clip layers of {clip} frames)",
+                            shot.name
+                        ),
+                        size,
+                    ));
+                    scratch += size / clips.max(1.0);
+                } else {
+                    files.push((name, size));
+                    scratch += size;
+                }
+            }
+            Format::Csv => files.push((name, bee_frames * CSV_BYTES)),
+        }
+    }
+    if plan.preview {
+        files.push((format!("{}.preview.png", shot.name), 200e3));
+    }
+    let _ = writeln!(s, "  a bake would write into {}:", plan.out_dir.display());
+    for (name, size) in &files {
+        let file = name.split(' ').next().unwrap_or(name);
+        let replaces = if plan.out_dir.join(file).exists() {
+            " (replaces the existing file)"
+        } else {
+            ""
+        };
+        let _ = writeln!(s, "    {name}: about {}{replaces}", bytes(*size));
+    }
+    let disk: f64 = files.iter().map(|(_, b)| b).sum();
+    // Simulation state (two agent buffers, neighbour records and lists, the frame
+    // record), the glTF writer's per-bee state and document, one USDA frame of text.
+    let mut memory = 30e6 + bees * 700.0;
+    if plan
+        .formats
+        .iter()
+        .any(|f| matches!(f, Format::Glb | Format::Gltf))
+    {
+        memory += bees * (100.0 + GLTF_JSON_PER_BEE);
+    }
+    if plan.formats.contains(&Format::Usda) {
+        memory += bees * USDA_BYTES * 2.0;
+    }
+    let seconds = predicted_seconds(shot);
+    let _ = writeln!(
+        s,
+        "  predicted: about {} of simulation (measured on a smaller copy of this shot), \
+         {} of memory, {} of disk ({} while baking)",
+        duration(seconds),
+        bytes(memory),
+        bytes(disk),
+        bytes(disk + scratch)
+    );
+    s
+}
+
+/// Seconds to simulate `shot`, from two frames of a copy with at most 2,000 agents at the
+/// same spawn density (spawn regions and bounds shrunk in proportion).
+fn predicted_seconds(shot: &Shot) -> f64 {
+    let total = shot.bee_count().max(1) as f64;
+    let f = (2000.0 / total).min(1.0);
+    let mut small = shot.clone();
+    small.frame_end = small.frame_start + 2;
+    let shrink = (f as f32).cbrt();
+    for w in &mut small.swarms {
+        w.count = ((w.count as f64 * f).ceil() as usize).max(1);
+        w.spawn = match w.spawn {
+            Region::Box { center, half } => Region::Box {
+                center,
+                half: half * shrink,
+            },
+            Region::Sphere { center, radius } => Region::Sphere {
+                center,
+                radius: radius * shrink,
+            },
+        };
+        if let Some((c, h)) = w.bounds {
+            w.bounds = Some((c, h * shrink));
+        }
+    }
+    let mut sim = crate::sim::Simulation::new(&small);
+    let start = std::time::Instant::now();
+    sim.advance();
+    sim.advance();
+    let per_agent_step =
+        start.elapsed().as_secs_f64() / (small.bee_count() as f64 * 2.0 * small.substeps as f64);
+    per_agent_step * total * (shot.frame_count() as f64 - 1.0) * shot.substeps as f64
+}
+
+fn bytes(b: f64) -> String {
+    match b {
+        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
+        b if b >= 1e6 => format!("{:.0} MB", b / 1e6),
+        b => format!("{:.0} kB", (b / 1e3).max(1.0)),
+    }
+}
+
+fn duration(s: f64) -> String {
+    match s {
+        s if s >= 3600.0 => format!("{:.1} h", s / 3600.0),
+        s if s >= 60.0 => format!("{:.1} min", s / 60.0),
+        s if s >= 1.0 => format!("{s:.0} s"),
+        s => format!("{s:.1} s"),
+    }
 }
 
 /// A length in metres, to the millimetre.
@@ -139,13 +290,6 @@ pub fn summary(shot: &Shot) -> String {
     }
     if shot.wind != glam::Vec3::ZERO {
         let _ = writeln!(s, "  wind {} m/s", shot.wind);
-    }
-    let _ = writeln!(s, "  outputs in {}:", shot.output.dir.display());
-    for f in &shot.output.formats {
-        let _ = writeln!(s, "    {}", f.file_name(&shot.name));
-    }
-    if shot.output.preview {
-        let _ = writeln!(s, "    {}.preview.png", shot.name);
     }
     s
 }

@@ -285,8 +285,12 @@ const CLIP_BYTES: u64 = 256 << 20;
 /// after its last frame.
 pub fn auto_clip_frames(meta: &CacheMeta) -> u32 {
     let instances: u64 = meta.swarms.iter().map(|s| s.count as u64).sum();
+    clip_frames_for(instances, meta.frame_count() as u64)
+}
+
+/// [`auto_clip_frames`] for `instances` over `frames`.
+pub fn clip_frames_for(instances: u64, frames: u64) -> u32 {
     let per_frame = instances.max(1) * BYTES_PER_INSTANCE_FRAME;
-    let frames = meta.frame_count() as u64;
     if per_frame * frames <= ONE_FILE_MAX_BYTES {
         0
     } else {
