@@ -188,6 +188,41 @@ fn temp_path(dir: &Path) -> PathBuf {
     dir.join(format!(".beeswarm-{}-{n}.tmp", std::process::id()))
 }
 
+/// Checks up front that `dest` can be written (its folder exists and takes a new file),
+/// so that a long computation does not end on an unwritable output: an input error
+/// (exit 2) naming `option`. Probes with a temporary file it removes at once.
+pub fn check_writable(dest: &Path, option: &str) -> Result<()> {
+    let dir = dest
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if dest.is_dir() {
+        return Err(Error::input(format!(
+            "{option} {}: a folder stands there, not a file",
+            dest.display()
+        )));
+    }
+    if !dir.is_dir() {
+        return Err(Error::input(format!(
+            "{option} {}: the folder {} does not exist",
+            dest.display(),
+            dir.display()
+        )));
+    }
+    let probe = temp_path(dir);
+    match File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(Error::input(format!(
+            "{option} {}: cannot write in {}: {e}",
+            dest.display(),
+            dir.display()
+        ))),
+    }
+}
+
 /// The owning process id of one of our temporary files, from its name.
 fn temp_owner(name: &str) -> Option<u32> {
     let rest = name.strip_prefix(".beeswarm-")?.strip_suffix(".tmp")?;

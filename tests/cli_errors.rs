@@ -1105,3 +1105,80 @@ fn check_refuses_an_output_folder_bake_could_not_use() {
     }
     assert_only(p, &["afile", "shot.toml"]);
 }
+
+#[test]
+fn outputs_are_checked_before_the_work_and_endless_inputs_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[scene]\nframes = [1, 30]\n[[swarm]]\ncount = 3\n",
+    )
+    .unwrap();
+    // A reference long enough to calibrate against: the model's own tracks.
+    let run = beeswarm(p, &["bake", "shot.toml", "--format", "csv", "--out", "ref"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = "ref/shot.tracks.csv";
+    for (args, says) in [
+        (
+            &[
+                "calibrate",
+                "--reference",
+                csv,
+                "--shot",
+                "shot.toml",
+                "--out",
+                "missing/fit.toml",
+                "--generations",
+                "1",
+                "--population",
+                "2",
+            ][..],
+            "--out missing/fit.toml: the folder missing does not exist",
+        ),
+        (
+            &[
+                "calibrate",
+                "--reference",
+                csv,
+                "--shot",
+                "shot.toml",
+                "--out",
+                "fit.toml",
+                "--figure",
+                "nope/fig.png",
+                "--generations",
+                "1",
+                "--population",
+                "2",
+            ][..],
+            "--figure nope/fig.png: the folder nope does not exist",
+        ),
+        (
+            &["eval", csv, "--reference", csv, "--out", "nope/report.json"][..],
+            "--out nope/report.json: the folder nope does not exist",
+        ),
+        (
+            &["eval", csv, "--reference", csv, "--figure", "ref"][..],
+            "--figure ref: a folder stands there",
+        ),
+    ] {
+        let run = beeswarm(p, args);
+        assert_eq!(run.code, 2, "{args:?}: {}", run.stderr);
+        assert_says(&run.stderr, &[says]);
+    }
+    assert!(!p.join("fit.toml").exists());
+    // A preset path to an endless file is refused after a bounded read.
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("/dev/zero", p.join("endless.toml")).unwrap();
+        std::fs::write(
+            p.join("shot.toml"),
+            "[[swarm]]\ncount = 3\npreset = \"endless.toml\"\n",
+        )
+        .unwrap();
+        let run = beeswarm(p, &["check", "shot.toml"]);
+        assert_eq!(run.code, 2, "{}", run.stderr);
+        assert_says(&run.stderr, &["key `swarm[0].preset`", "larger than 16 MB"]);
+    }
+}

@@ -379,6 +379,13 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         "from 1 to 1000 simulation seeds",
     )?;
     crate::bake::check_threads(args.threads)?;
+    // Every output is checked before the generations run, not after.
+    crate::atomic::check_writable(&args.out, "--out")?;
+    let figure = args
+        .figure
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("fitness.png"));
+    crate::atomic::check_writable(&figure, "--figure")?;
     let shot = crate::shot::load(&args.shot)?;
     if shot.swarms.is_empty() {
         return Err(Error::input(format!(

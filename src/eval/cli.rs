@@ -140,6 +140,15 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         100.0,
         "a speed from 0 to 100 m/s",
     )?;
+    for (path, option) in [
+        (&args.out, "--out"),
+        (&args.figure, "--figure"),
+        (&args.markdown, "--markdown"),
+    ] {
+        if let Some(p) = path {
+            crate::atomic::check_writable(p, option)?;
+        }
+    }
     for s in std::iter::once(&args.tracks).chain(&args.candidates) {
         if named_paths(s).1.iter().any(|p| p.as_os_str().is_empty()) {
             return Err(Error::input(format!(

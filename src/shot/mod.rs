@@ -149,6 +149,30 @@ pub struct Output {
     pub options: OutputOptions,
 }
 
+/// The largest shot or preset file read, bytes: far beyond any hand-written or generated
+/// shot, and a bound on what a path to an endless file (`/dev/zero`) can make us read.
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// Reads a whole file of at most [`MAX_FILE_BYTES`]; a larger one (or an endless one)
+/// is an `InvalidData` error saying so, read no further than the limit.
+pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "larger than {} MB: not a shot or preset file",
+                MAX_FILE_BYTES >> 20
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
 /// Reads and resolves a shot file.
 pub fn load(path: &Path) -> Result<Shot, ShotError> {
     let error = |line, column, message: String, hint: Option<&str>| ShotError {
@@ -160,7 +184,7 @@ pub fn load(path: &Path) -> Result<Shot, ShotError> {
         source_line: None,
         hint: hint.map(str::to_owned),
     };
-    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
+    let bytes = read_bounded(path).map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => error(
             0,
             0,

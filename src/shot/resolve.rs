@@ -507,19 +507,24 @@ fn resolve_params(
 /// Reads a preset file (`[preset]` header and `[params]`) for a swarm of `model`.
 pub fn load_preset_file(path: &Path, model: ModelKind) -> Result<ParamValues, ShotError> {
     let builtin = || quoted(&preset_names(model));
-    let src = std::fs::read_to_string(path).map_err(|e| ShotError {
-        file: path.to_path_buf(),
-        line: 0,
-        column: 0,
-        key: String::new(),
-        message: format!("cannot read the preset file {}: {e}", path.display()),
-        source_line: None,
-        hint: Some(format!(
-            "built-in presets of the {} model: {}",
-            model.name(),
-            builtin()
-        )),
-    })?;
+    let src = read_bounded(path)
+        .and_then(|b| {
+            String::from_utf8(b)
+                .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+        })
+        .map_err(|e| ShotError {
+            file: path.to_path_buf(),
+            line: 0,
+            column: 0,
+            key: String::new(),
+            message: format!("cannot read the preset file {}: {e}", path.display()),
+            source_line: None,
+            hint: Some(format!(
+                "built-in presets of the {} model: {}",
+                model.name(),
+                builtin()
+            )),
+        })?;
     let cx = Ctx {
         file: path,
         loc: Locator::new(&src),
