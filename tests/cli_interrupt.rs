@@ -139,3 +139,38 @@ fn the_next_bake_removes_what_a_killed_bake_left() {
         "the next bake removed them"
     );
 }
+
+#[test]
+fn many_swarms_bake_under_a_small_open_file_limit() {
+    // 150 swarms: about 1,200 USDA scratch files, beyond a 256-file limit if all stayed open.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let mut shot = String::from("[scene]\nframes = [1, 4]\n");
+    for i in 0..150 {
+        shot += &format!("[[swarm]]\nname = \"s{i}\"\ncount = 1\n");
+    }
+    std::fs::write(p.join("many.toml"), shot).unwrap();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -n 256 && exec '{}' bake many.toml --format usda,glb,csv --progress none",
+            env!("CARGO_BIN_EXE_beeswarm")
+        ))
+        .current_dir(p)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let usda = std::fs::read_to_string(p.join("out/many.usda")).unwrap();
+    assert_eq!(usda.matches("point3f[] positions.timeSamples").count(), 150);
+    // Eight sampled attributes a swarm: positions, orientations, velocities, angular
+    // velocities, extent, and the primvars pitch, roll and sway.
+    assert_eq!(
+        usda.matches("            4: [").count(),
+        150 * 8,
+        "every swarm and attribute at frame 4"
+    );
+}

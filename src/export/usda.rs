@@ -251,10 +251,43 @@ fn push_vec3(out: &mut Vec<u8>, v: Vec3) {
     out.push(b')');
 }
 
+/// Scratch files a writer keeps open between frames, at most. A shot of many swarms has
+/// more (eight or so per swarm): they are then opened for each frame's append and closed
+/// again, so the process stays far below the usual 1,024-file limit whatever the count.
+const OPEN_SPILLS: usize = 128;
+
 /// The scratch file collecting one (swarm, attribute)'s sample lines for one chunk.
 struct Spill {
     scratch: ScratchFile,
-    w: BufWriter<File>,
+    /// Open while the chunk has few enough spills (see `OPEN_SPILLS`).
+    w: Option<BufWriter<File>>,
+}
+
+impl Spill {
+    /// The writer, opened for appending if it was closed.
+    fn writer(&mut self) -> Result<&mut BufWriter<File>> {
+        if self.w.is_none() {
+            let f = std::fs::OpenOptions::new()
+                .append(true)
+                .open(&self.scratch.path)
+                .map_err(io(&self.scratch.path))?;
+            // Smaller than a full piece (8,192 instances of text), which then goes
+            // straight to the file instead of being copied through the buffer.
+            self.w = Some(BufWriter::with_capacity(64 << 10, f));
+        }
+        Ok(self.w.as_mut().expect("opened above"))
+    }
+
+    /// Flushes and, unless `keep_open`, closes the writer.
+    fn settle(&mut self, keep_open: bool) -> Result<()> {
+        if let Some(w) = self.w.as_mut() {
+            w.flush().map_err(io(&self.scratch.path))?;
+        }
+        if !keep_open {
+            self.w = None;
+        }
+        Ok(())
+    }
 }
 
 /// The samples of the frames `start..` not yet written into a layer.
@@ -475,13 +508,8 @@ impl UsdaWriter {
                     &self.dir,
                     &format!("usda.{}.{}", m.name, attr.name(m).replace(':', "_")),
                 );
-                let f = File::create(&scratch.path).map_err(io(&scratch.path))?;
-                spills.push(Spill {
-                    // Smaller than a full piece (8,192 instances of text), which then goes
-                    // straight to the file instead of being copied through the buffer.
-                    w: BufWriter::with_capacity(64 << 10, f),
-                    scratch,
-                });
+                File::create(&scratch.path).map_err(io(&scratch.path))?;
+                spills.push(Spill { w: None, scratch });
             }
         }
         Ok(Chunk { start, spills })
@@ -499,17 +527,20 @@ impl UsdaWriter {
             .chunk_by(|a, b| a.swarm == b.swarm && a.attr == b.attr)
             .collect();
         debug_assert_eq!(groups.len(), chunk.spills.len());
+        let keep_open = chunk.spills.len() <= OPEN_SPILLS;
         chunk
             .spills
             .par_iter_mut()
             .zip(groups)
             .try_for_each(|(spill, group)| {
-                let path = &spill.scratch.path;
-                spill.w.write_all(&head).map_err(io(path))?;
+                let path = spill.scratch.path.clone();
+                let w = spill.writer()?;
+                w.write_all(&head).map_err(io(&path))?;
                 for p in group {
-                    spill.w.write_all(&p.text).map_err(io(path))?;
+                    w.write_all(&p.text).map_err(io(&path))?;
                 }
-                spill.w.write_all(b"],\n").map_err(io(path))
+                w.write_all(b"],\n").map_err(io(&path))?;
+                spill.settle(keep_open)
             })
     }
 
@@ -529,7 +560,7 @@ impl UsdaWriter {
                 ));
             }
             let spill = &mut chunk.spills[self.first_spill[swarm] + a];
-            spill.w.flush().map_err(io(&spill.scratch.path))?;
+            spill.settle(false)?;
             let mut src = File::open(&spill.scratch.path).map_err(io(&spill.scratch.path))?;
             writeln!(out, "        {}.timeSamples = {{", attr.decl(m)).map_err(io(out_path))?;
             std::io::copy(&mut src, out).map_err(io(out_path))?;
