@@ -11,18 +11,16 @@ use clap::Args;
     after_help = "Examples:\n  beeswarm check examples/nest.toml\n  beeswarm check shot.toml --frames 1:48 --format usda,csv --out caches"
 )]
 pub struct CheckArgs {
-    /// The same options as `bake` (the shot file is required here).
+    /// The same options as `bake` (without a shot file, the built-in demo shot).
     #[command(flatten)]
     pub bake: super::bake::BakeArgs,
 }
 
 pub fn run(a: CheckArgs) -> Result<()> {
-    let Some(path) = &a.bake.shot else {
-        return Err(crate::error::Error::input(
-            "check needs a shot file: beeswarm check shot.toml",
-        ));
+    let shot = match &a.bake.shot {
+        Some(path) => crate::shot::load(path)?,
+        None => crate::shot::embedded_default(),
     };
-    let shot = crate::shot::load(path)?;
     // Whatever would stop a bake before it starts stops the check too.
     let plan = a.bake.plan(shot)?;
     let mut text = summary(&plan.shot);
