@@ -30,11 +30,11 @@ pub fn run(a: CheckArgs) -> Result<()> {
 }
 
 /// Bytes per bee and frame of each cache, measured on `examples/grassland.toml` (1,000
-/// bees of the bee model, 240 frames): glTF 62 (plus 1.4 kB of JSON per bee), USDA 180,
-/// CSV 163. Models without channels write a little less.
+/// bees of the bee model, 240 frames): glTF 62 (plus 1.4 kB of JSON per bee), USDA the
+/// writer's own estimate, CSV 163. Models without channels write a little less.
 const GLTF_BYTES: f64 = 62.0;
 const GLTF_JSON_PER_BEE: f64 = 1400.0;
-const USDA_BYTES: f64 = 180.0;
+const USDA_BYTES: f64 = crate::export::usda::BYTES_PER_INSTANCE_FRAME as f64;
 const CSV_BYTES: f64 = 163.0;
 
 /// What a bake of the plan would write and replace, and the time, memory and disk it

@@ -305,8 +305,10 @@ struct PendingClip {
 }
 
 /// About how many bytes of samples one instance adds per frame (positions, orientations,
-/// velocities, angular velocities, three bee channels).
-const BYTES_PER_INSTANCE_FRAME: u64 = 190;
+/// velocities, angular velocities, three bee channels): 180, measured on
+/// `examples/grassland.toml` (43.3 MB for 1,000 bees × 240 frames). `beeswarm check`
+/// predicts cache sizes from it too.
+pub const BYTES_PER_INSTANCE_FRAME: u64 = 180;
 /// A cache up to this size is one file by default; a larger one is split into value clips.
 const ONE_FILE_MAX_BYTES: u64 = 1 << 30;
 /// The size of one default value clip.
@@ -1087,9 +1089,9 @@ mod tests {
 
     #[test]
     fn large_caches_default_to_value_clips_of_about_256_mib() {
-        // 10,000 bees × 240 frames ≈ 0.46 GB: one file.
+        // 10,000 bees × 240 frames ≈ 0.43 GB: one file.
         assert_eq!(auto_clip_frames(&meta(&[6000, 4000], (1, 240))), 0);
-        // 100,000 × 240 ≈ 4.6 GB: clips of 14 frames (100,000 × 190 B × 14 ≈ 266 MB).
+        // 100,000 × 240 ≈ 4.3 GB: clips of 14 frames (100,000 × 180 B × 14 ≈ 252 MB).
         let clip = auto_clip_frames(&meta(&[100_000], (1, 240)));
         assert_eq!(clip, 14);
         // A huge swarm gets one frame per clip, never 0.

@@ -271,38 +271,35 @@ pub fn pull(
 /// was, at rest.
 #[inline(always)]
 pub fn keep_out(cx: &Context, from: Vec3, pos: Vec3, vel: Vec3, ri: f32) -> (Vec3, Vec3) {
-    if cx.obstacles.is_empty() {
-        return if pos.is_finite() && vel.is_finite() {
-            (pos, vel)
-        } else {
-            (from, Vec3::ZERO)
-        };
-    }
-    let (mut pos, mut vel) = sweep(cx.obstacles, from, pos, vel, ri);
-    // Pushing a body out of one obstacle can push it into another where they overlap:
-    // repeat, with a tolerance after the first pass so that a body already put on a
-    // surface is not nudged by rounding.
-    for round in 0..4 {
-        let inside = if round == 0 { ri } else { ri * 0.999 };
-        let mut moved = false;
-        for q in cx.obstacle_queries(pos) {
-            if q.distance < inside {
-                // Numerically the ramp can leave a sliver of approach; never let a body in.
-                pos = q.point + q.normal * ri;
-                let vn = vel.dot(q.normal);
-                if vn < 0.0 {
-                    vel -= q.normal * vn;
+    let (mut pos, mut vel) = (pos, vel);
+    if !cx.obstacles.is_empty() {
+        (pos, vel) = sweep(cx.obstacles, from, pos, vel, ri);
+        // Pushing a body out of one obstacle can push it into another where they
+        // overlap: repeat, with a tolerance after the first pass so that a body already
+        // put on a surface is not nudged by rounding.
+        for round in 0..4 {
+            let inside = if round == 0 { ri } else { ri * 0.999 };
+            let mut moved = false;
+            for q in cx.obstacle_queries(pos) {
+                if q.distance < inside {
+                    // Numerically the ramp can leave a sliver of approach; never let a
+                    // body in.
+                    pos = q.point + q.normal * ri;
+                    let vn = vel.dot(q.normal);
+                    if vn < 0.0 {
+                        vel -= q.normal * vn;
+                    }
+                    moved = true;
                 }
-                moved = true;
             }
-        }
-        if !moved {
-            break;
-        }
-        if round == 3 {
-            // Still pushed to and fro between overlapping obstacles: a crevice the body
-            // does not fit. It stays where it was, which was outside all of them.
-            return (from, Vec3::ZERO);
+            if !moved {
+                break;
+            }
+            if round == 3 {
+                // Still pushed to and fro between overlapping obstacles: a crevice the
+                // body does not fit. It stays where it was, outside all of them.
+                return (from, Vec3::ZERO);
+            }
         }
     }
     if !pos.is_finite() || !vel.is_finite() {

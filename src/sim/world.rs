@@ -218,8 +218,9 @@ pub struct Simulation {
     cancel: &'static AtomicBool,
 }
 
-/// Where agent k of swarm `si` starts, and the random stream its model continues from.
-fn start(shot: &Shot, si: usize, k: usize) -> (Start, Rng) {
+/// Where agent k of swarm `si` starts (clear of `obstacles`, the shot's shapes), and the
+/// random stream its model continues from.
+fn start(shot: &Shot, obstacles: &[Shape], si: usize, k: usize) -> (Start, Rng) {
     let s = &shot.swarms[si];
     let mut rng = Rng::new(shot.seed, si as u64, k as u64);
     let mut pos = match s.spawn {
@@ -250,8 +251,8 @@ fn start(shot: &Shot, si: usize, k: usize) -> (Start, Rng) {
     let r = s.bee.radius * size;
     for _ in 0..8 {
         let mut moved = false;
-        for o in &shot.obstacles {
-            let q = geometry::query(&o.shape, pos);
+        for o in obstacles {
+            let q = geometry::query(o, pos);
             if q.distance < r {
                 pos = q.point + q.normal * (r + 1e-3);
                 moved = true;
@@ -261,14 +262,12 @@ fn start(shot: &Shot, si: usize, k: usize) -> (Start, Rng) {
             break;
         }
     }
-    if shot
-        .obstacles
+    if obstacles
         .iter()
-        .any(|o| geometry::signed_distance(&o.shape, pos) < r)
+        .any(|o| geometry::signed_distance(o, pos) < r)
     {
         // A crevice between overlapping obstacles: the nearest free spot instead.
-        let shapes: Vec<_> = shot.obstacles.iter().map(|o| o.shape).collect();
-        pos = geometry::free_point_near(&shapes, pos, r + 1e-3).unwrap_or(pos);
+        pos = geometry::free_point_near(obstacles, pos, r + 1e-3).unwrap_or(pos);
     }
     let dir = normalize_or(
         Vec3::new(
@@ -315,7 +314,7 @@ impl Simulation {
                 let model = M::new(&setup);
                 let agents: Vec<_> = (0..s.count)
                     .map(|k| {
-                        let (start, mut rng) = start(&shot, si, k);
+                        let (start, mut rng) = start(&shot, &obstacles, si, k);
                         model.spawn(&start, &mut rng)
                     })
                     .collect();
@@ -447,15 +446,10 @@ impl Simulation {
         }
     }
 
-    /// Advances one frame (`substeps` integration steps) and records it.
+    /// Advances one frame (`substeps` integration steps) and records it; with a cancel
+    /// flag set (see [`Simulation::set_cancel`]) it stops as [`Simulation::advance_or_cancel`].
     pub fn advance(&mut self) {
-        let dt = self.shot.dt() as f32;
-        for k in 0..self.shot.substeps {
-            let t = self.time() + (k as f64) * self.shot.dt();
-            self.step(t, dt);
-        }
-        self.frame += 1;
-        self.update_record();
+        self.advance_or_cancel();
     }
 
     /// A flag that stops the simulation part-way through a frame once set (a frame of a
@@ -500,12 +494,11 @@ impl Simulation {
         self.update_targets(t);
         // Pass 0: every agent's neighbour record, and the grid over their positions.
         self.agents.resize(n, Neighbour::default());
-        for (s, (swarm, rest)) in self
-            .shot
-            .swarms
-            .iter()
-            .zip(split(&mut self.agents, &self.swarms))
-        {
+        for (s, (swarm, rest)) in self.shot.swarms.iter().zip(
+            self.swarms
+                .iter()
+                .zip(split(&mut self.agents, &self.swarms)),
+        ) {
             swarm.neighbour_records(rest, s.bee.mass, s.bee.radius);
         }
         self.positions.clear();
@@ -516,20 +509,17 @@ impl Simulation {
         // Pass 1: neighbour lists and the models' gather passes, written in place.
         self.lists.resize(n, NeighbourList::default());
         self.gathered.resize(n, (0.0, 0.0));
-        let mut lists = &mut self.lists[..];
-        let mut gathered = &mut self.gathered[..];
-        for swarm in &self.swarms {
-            let (l, lr) = std::mem::take(&mut lists).split_at_mut(swarm.len());
-            let (g, gr) = std::mem::take(&mut gathered).split_at_mut(swarm.len());
-            let shared = Gather {
-                grid: &self.grid,
-                agents: &self.agents,
-                targets: &self.targets,
-                max_body_radius: self.max_body_radius,
-                cancel: self.cancel,
-            };
-            swarm.gather(&shared, l, g);
-            (lists, gathered) = (lr, gr);
+        let shared = Gather {
+            grid: &self.grid,
+            agents: &self.agents,
+            targets: &self.targets,
+            max_body_radius: self.max_body_radius,
+            cancel: self.cancel,
+        };
+        let per_swarm =
+            split(&mut self.lists, &self.swarms).zip(split(&mut self.gathered, &self.swarms));
+        for (swarm, (lists, gathered)) in self.swarms.iter().zip(per_swarm) {
+            swarm.gather(&shared, lists, gathered);
         }
         for (a, &(d, p)) in self.agents.iter_mut().zip(&self.gathered) {
             a.density = d;
@@ -569,14 +559,15 @@ impl Simulation {
     }
 }
 
-/// `agents` cut into one slice per swarm, in shot order.
-fn split<'a>(
-    mut agents: &'a mut [Neighbour],
-    swarms: &'a [Box<dyn Swarm>],
-) -> impl Iterator<Item = (&'a dyn Swarm, &'a mut [Neighbour])> {
-    swarms.iter().map(move |s| {
-        let (head, tail) = std::mem::take(&mut agents).split_at_mut(s.len());
-        agents = tail;
-        (s.as_ref(), head)
+/// A per-agent array cut into one slice per swarm, in shot order.
+fn split<'a, T>(
+    mut all: &'a mut [T],
+    swarms: &[Box<dyn Swarm>],
+) -> impl Iterator<Item = &'a mut [T]> {
+    let lens: Vec<usize> = swarms.iter().map(|s| s.len()).collect();
+    lens.into_iter().map(move |n| {
+        let (head, tail) = std::mem::take(&mut all).split_at_mut(n);
+        all = tail;
+        head
     })
 }
