@@ -209,18 +209,22 @@ pub fn check_writable(dest: &Path, option: &str) -> Result<()> {
             dir.display()
         )));
     }
-    let probe = temp_path(dir);
-    match File::create(&probe) {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        Err(e) => Err(Error::input(format!(
+    probe_writable(dir).map_err(|e| {
+        Error::input(format!(
             "{option} {}: cannot write in {}: {e}",
             dest.display(),
             dir.display()
-        ))),
-    }
+        ))
+    })
+}
+
+/// Whether a new file can be made in the folder `dir`: creates one of our temporary
+/// files there and removes it at once.
+pub fn probe_writable(dir: &Path) -> std::io::Result<()> {
+    let probe = temp_path(dir);
+    File::create(&probe)?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// The owning process id of one of our temporary files, from its name.

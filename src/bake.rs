@@ -43,14 +43,12 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
     })?;
     // What bakes killed outright (kill -9, out of memory) left here goes first.
     crate::atomic::remove_stale_temporaries(dir);
-    let probe = crate::atomic::ScratchFile::new(dir, "write-probe");
-    std::fs::write(&probe.path, b"").map_err(|e| {
+    crate::atomic::probe_writable(dir).map_err(|e| {
         Error::input(format!(
             "the output folder {} is not writable: {e}",
             dir.display()
         ))
-    })?;
-    Ok(())
+    })
 }
 
 /// The most worker threads a command accepts: four per core. More only adds switching

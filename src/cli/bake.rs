@@ -173,17 +173,12 @@ fn writable_ancestor(dir: &Path, source: &str) -> Result<()> {
         return Ok(()); // relative to the working folder, which exists
     };
     if existing == dir {
-        let probe = existing.join(format!(".beeswarm-{}-probe.tmp", std::process::id()));
-        return match std::fs::File::create(&probe) {
-            Ok(_) => {
-                let _ = std::fs::remove_file(&probe);
-                Ok(())
-            }
-            Err(e) => Err(Error::input(format!(
+        return crate::atomic::probe_writable(dir).map_err(|e| {
+            Error::input(format!(
                 "the output folder {} ({source}) is not writable: {e}",
                 dir.display()
-            ))),
-        };
+            ))
+        });
     }
     let probe = existing.join(format!(".beeswarm-{}-probe.tmp", std::process::id()));
     match std::fs::create_dir(&probe) {
