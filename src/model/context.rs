@@ -138,11 +138,4 @@ impl Context<'_> {
             .iter()
             .map(move |o| crate::geometry::query(o, p))
     }
-
-    /// Signed distance to the nearest obstacle surface, m (`INFINITY` without obstacles).
-    pub fn nearest_obstacle(&self, p: Vec3) -> f32 {
-        self.obstacle_queries(p)
-            .map(|q| q.distance)
-            .fold(f32::INFINITY, f32::min)
-    }
 }
