@@ -1,5 +1,6 @@
 //! The same shot and seed give byte-identical caches whatever the number of threads, and
-//! a different seed gives a different swarm.
+//! a different seed gives a different swarm. The shot holds a crowd (400 bees in a 5 cm
+//! cube) so that the bounded-neighbour search's ring walk is covered too.
 
 use std::path::Path;
 use std::process::Command;
@@ -23,6 +24,10 @@ model = "boids"
 name = "brownian"
 count = 60
 model = "brownian"
+[[swarm]]
+name = "crowd"
+count = 400
+spawn = { shape = "box", center = [0.6, 1.5, 0], size = [0.05, 0.05, 0.05] }
 [[obstacle]]
 type = "cylinder"
 center = [0.3, 1, 0.3]

@@ -563,3 +563,31 @@ fn a_bee_stopped_in_a_corner_turns_and_flies_out() {
         "the bee should have turned and left the corner: {end}"
     );
 }
+
+#[test]
+fn a_crowd_with_bounded_neighbours_still_spreads_out() {
+    // 2,000 bees released in a 10 cm cube (2 million per m³): each feels only its 16
+    // nearest (docs/model.md, "Bounded neighbours"), and their pressure must still push
+    // the crowd apart — further than contact springs alone push it (1.68 m against 1.03 m
+    // when measured) — with
+    // every position finite.
+    let spread_after_1s = |params: &str| {
+        let src = format!(
+            "[scene]\nframes = [1, 25]\n[[swarm]]\ncount = 2000\nparams = {{ {params} }}\nspawn = {{ shape = \"box\", center = [0, 1, 0], size = [0.1, 0.1, 0.1] }}\n"
+        );
+        let mut sim = Simulation::new(&shot(&src));
+        while !sim.done() {
+            sim.advance();
+        }
+        let p = &sim.record()[0].position;
+        assert!(p.iter().all(|p| p.is_finite()));
+        let c = p.iter().copied().sum::<Vec3>() / p.len() as f32;
+        p.iter().map(|q| q.distance(c)).sum::<f32>() / p.len() as f32
+    };
+    let pushed = spread_after_1s("");
+    let drifting = spread_after_1s("kappa3 = 0");
+    assert!(
+        pushed > 1.3 * drifting,
+        "mean distance from the centre after 1 s: {pushed} m with repulsion, {drifting} m without"
+    );
+}

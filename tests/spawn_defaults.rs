@@ -59,11 +59,12 @@ fn check_reports_density_and_warns_when_agents_start_crowded() {
         "{crowded}"
     );
     assert!(
-        crowded.contains("warning: more than 40 neighbours per agent"),
+        crowded
+            .contains("warning: more than 16 neighbours per agent: each feels only its nearest 16"),
         "{crowded}"
     );
     assert!(
-        crowded.contains("at most 2829 agents per m³ here"),
+        crowded.contains("at most 1131 agents per m³ here"),
         "{crowded}"
     );
 }

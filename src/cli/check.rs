@@ -2,7 +2,7 @@
 
 use crate::error::Result;
 use crate::export::Format;
-use crate::shot::{Region, Shape, Shot, Swarm, defaults};
+use crate::shot::{Region, Shape, Shot, Swarm};
 use clap::Args;
 
 #[derive(Args, Debug)]
@@ -180,6 +180,8 @@ fn mm(v: f32) -> String {
 /// The swarm's starting density, and a warning when agents start with more neighbours than
 /// a step handles at its usual cost.
 fn crowding(w: &Swarm) -> String {
+    // Beyond the most neighbours an agent interacts with, each feels only its nearest.
+    const CROWDED: f64 = crate::model::context::MAX_NEIGHBOURS as f64;
     let (shape, volume) = match w.spawn {
         Region::Box { half, .. } => (
             format!(
@@ -207,14 +209,14 @@ fn crowding(w: &Swarm) -> String {
             num(neighbours.round()),
             num(h)
         );
-        if neighbours > defaults::CROWDED_NEIGHBOURS {
+        if neighbours > CROWDED {
             line += &format!(
-                "\n      warning: more than {} neighbours per agent makes every step far slower; \
-                 give the swarm a larger spawn region (at most {} agents per m³ here)",
-                defaults::CROWDED_NEIGHBOURS,
-                num((defaults::CROWDED_NEIGHBOURS
-                    / (4.0 / 3.0 * std::f64::consts::PI * h.powi(3)))
-                .floor())
+                "\n      warning: more than {} neighbours per agent: each feels only its nearest {} \
+                 and a step costs 2–3× more; give the swarm a larger spawn region \
+                 (at most {} agents per m³ here)",
+                CROWDED,
+                CROWDED,
+                num((CROWDED / (4.0 / 3.0 * std::f64::consts::PI * h.powi(3))).floor())
             );
         }
     }

@@ -1,25 +1,95 @@
-//! Uniform-grid neighbour search. Paper 000 (Sec. V-B) accelerates it with a spatial hash;
-//! a dense grid over the swarm's bounding box does the same job with fewer instructions
-//! (no hashing, no bucket collisions to filter).
+//! Uniform-grid neighbour search with a bounded number of neighbours per agent. Paper 000
+//! (Sec. V-B) accelerates its neighbour sums with a spatial hash; a dense grid over the
+//! swarm's bounding box does the same job with fewer instructions (no hashing, no bucket
+//! collisions to filter).
 //!
-//! Bee indices are counting-sorted by cell in increasing index order, so neighbour
-//! iteration order — and with it every floating-point sum — is the same whatever the
-//! number of threads. A query visits 9 rows of 3 adjacent cells, each one contiguous run
-//! of the sorted array.
+//! An agent interacts with at most `k` neighbours: the nearest within the interaction
+//! radius (docs/model.md, "Bounded neighbours"). The cell edge follows the swarm's density
+//! — about two agents per cell where a typical agent is, never more than the radius — and
+//! a query walks cells in rings of growing distance and stops once no unvisited cell can
+//! hold anything nearer than the `k` found. A step then costs about the same per agent in a
+//! crowd of 100,000 per m³ as in a sparse cloud.
+//!
+//! Agent indices are counting-sorted by cell in increasing index order and the ring walk
+//! is a fixed function of the query point and the grid, so the neighbours found — and the
+//! order every floating-point sum visits them in — are the same whatever the number of
+//! threads.
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec4};
+
+/// Candidates tested together.
+const LANES: usize = 4;
+use rayon::prelude::*;
+
+/// Agents per cell a typical agent sees (bee-weighted mean occupancy) that the cell edge
+/// aims at in crowds: small enough that the ring walk tests few far candidates, large
+/// enough that few cells are empty.
+const TARGET_OCCUPANCY: f32 = 16.0;
+/// The cell edge never drops below this fraction of the radius, which bounds the rings a
+/// query in a sparse part of a mixed scene walks (at most 8).
+const MIN_CELL_FRACTION: f32 = 0.125;
 
 #[derive(Clone, Debug, Default)]
 pub struct Grid {
     origin: Vec3,
+    cell: f32,
     inv_cell: f32,
     dims: IVec3,
     /// `starts[c]..starts[c + 1]` indexes `items` for cell c.
     starts: Vec<u32>,
     items: Vec<u32>,
-    /// Positions in `items` order, so candidate tests read one contiguous array.
-    sorted: Vec<Vec3>,
+    /// Positions in `items` order, one array per axis, so candidate tests read
+    /// contiguous memory.
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
     cells: Vec<u32>,
+}
+
+/// Up to `k` nearest candidates found so far: point indices and their squared distances,
+/// and the worst of them once full.
+struct Nearest<'a> {
+    at: &'a mut [u32],
+    d2: [f32; MAX_K],
+    len: usize,
+    k: usize,
+    /// Squared distance a candidate must beat: the radius until `k` are found, then the
+    /// farthest of them.
+    bound: f32,
+    worst: usize,
+}
+
+/// The largest `k` a query takes.
+pub const MAX_K: usize = 32;
+
+impl Nearest<'_> {
+    #[inline(always)]
+    fn offer(&mut self, t: u32, d2: f32) {
+        if self.len < self.k {
+            self.at[self.len] = t;
+            self.d2[self.len] = d2;
+            self.len += 1;
+            if self.len == self.k {
+                self.find_worst();
+            }
+        } else {
+            self.at[self.worst] = t;
+            self.d2[self.worst] = d2;
+            self.find_worst();
+        }
+    }
+
+    fn find_worst(&mut self) {
+        let mut w = 0;
+        for m in 1..self.len {
+            // Ties go to the later entry, so the order of arrival decides, as everywhere.
+            if self.d2[m] >= self.d2[w] {
+                w = m;
+            }
+        }
+        self.worst = w;
+        self.bound = self.d2[w];
+    }
 }
 
 impl Grid {
@@ -27,9 +97,10 @@ impl Grid {
     /// the last build land in the border cells, which keeps queries valid).
     #[inline]
     fn cell_of(&self, p: Vec3) -> IVec3 {
-        let c = ((p - self.origin) * self.inv_cell).floor();
-        let max = (self.dims - IVec3::ONE).as_vec3();
-        c.clamp(Vec3::ZERO, max).as_ivec3()
+        // Clamped in floats first: `as` saturates, and NaN-free positions are guaranteed.
+        let c = ((p - self.origin) * self.inv_cell).max(Vec3::ZERO);
+        let max = self.dims - IVec3::ONE;
+        IVec3::new(floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)).clamp(IVec3::ZERO, max)
     }
 
     #[inline]
@@ -37,11 +108,16 @@ impl Grid {
         (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize
     }
 
-    /// Rebuilds the grid over `positions`; cells are at least `min_cell` metres (the
-    /// interaction radius) and grow when the swarm is spread so widely that the grid would
-    /// need more than about 8 cells per bee.
-    pub fn build(&mut self, positions: &[Vec3], min_cell: f32) {
-        use rayon::prelude::*;
+    /// The cell edge, m.
+    pub fn cell(&self) -> f32 {
+        self.cell
+    }
+
+    /// Rebuilds the grid over `positions` for queries within `radius` metres: cells of at
+    /// most `radius`, smaller where the agents crowd (see the module notes), and larger
+    /// when the swarm is spread so widely that the grid would need more than the cell
+    /// budget (32 per agent, at most 2^25).
+    pub fn build(&mut self, positions: &[Vec3], radius: f32) {
         let n = positions.len();
         let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (lo, hi) = positions
@@ -53,28 +129,66 @@ impl Grid {
         } else {
             (lo, hi)
         };
+        let radius = radius.max(1e-6);
+        self.layout(lo, hi, self.capped(lo, hi, radius, n));
+        self.sort(positions);
+        // How crowded a typical agent's cell is: the agent-weighted mean occupancy.
+        let crowd = self
+            .starts
+            .windows(2)
+            .map(|w| {
+                let c = (w[1] - w[0]) as f64;
+                c * c
+            })
+            .sum::<f64>()
+            / n.max(1) as f64;
+        if crowd > (TARGET_OCCUPANCY as f64) * 2.0 {
+            // Crowded: the edge that holds about TARGET_OCCUPANCY agents at that density.
+            let cell = self.cell * (TARGET_OCCUPANCY / crowd as f32).cbrt();
+            let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n);
+            if cell < self.cell * 0.9 {
+                self.layout(lo, hi, cell);
+                self.sort(positions);
+            }
+        }
+    }
+
+    /// `cell`, grown if the box would need more than the cell budget.
+    fn capped(&self, lo: Vec3, hi: Vec3, cell: f32, n: usize) -> f32 {
         let extent = (hi - lo).max(Vec3::splat(1e-6));
-        let budget = (8 * n).max(32_768) as f32;
-        let volume_cells =
-            (extent.x / min_cell + 1.0) * (extent.y / min_cell + 1.0) * (extent.z / min_cell + 1.0);
-        let cell = if volume_cells > budget {
-            min_cell * (volume_cells / budget).cbrt() * 1.01
+        // Up to 32 cells per agent (a crowd inside a wide sparse cloud needs fine cells
+        // over the whole box), capped at 2^25 cells (128 MB of cell starts).
+        let budget = (32 * n).min(1 << 25).max(8 * n).max(32_768) as f32;
+        let cells = (extent.x / cell + 1.0) * (extent.y / cell + 1.0) * (extent.z / cell + 1.0);
+        if cells > budget {
+            cell * (cells / budget).cbrt() * 1.01
         } else {
-            min_cell
-        };
+            cell
+        }
+    }
+
+    fn layout(&mut self, lo: Vec3, hi: Vec3, cell: f32) {
+        let extent = (hi - lo).max(Vec3::splat(1e-6));
         self.origin = lo;
+        self.cell = cell;
         self.inv_cell = 1.0 / cell;
         self.dims = ((extent / cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
-        let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
+    }
 
-        let cells: Vec<u32> = positions
-            .par_iter()
-            .map(|p| self.index(self.cell_of(*p)) as u32)
-            .collect();
-        self.cells = cells;
+    /// Counting sort of the agents by cell.
+    fn sort(&mut self, positions: &[Vec3]) {
+        let n = positions.len();
+        let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
+        let mut cells = std::mem::take(&mut self.cells);
+        cells.clear();
+        cells.par_extend(
+            positions
+                .par_iter()
+                .map(|p| self.index(self.cell_of(*p)) as u32),
+        );
         self.starts.clear();
         self.starts.resize(total + 1, 0);
-        for &c in &self.cells {
+        for &c in &cells {
             self.starts[c as usize + 1] += 1;
         }
         for i in 0..total {
@@ -82,53 +196,194 @@ impl Grid {
         }
         self.items.resize(n, 0);
         let mut fill = self.starts[..total].to_vec();
-        for (i, &c) in self.cells.iter().enumerate() {
+        for (i, &c) in cells.iter().enumerate() {
             self.items[fill[c as usize] as usize] = i as u32;
             fill[c as usize] += 1;
         }
-        self.sorted.clear();
-        self.sorted
-            .extend(self.items.iter().map(|&i| positions[i as usize]));
+        self.cells = cells;
+        let items = &self.items;
+        for (axis, out) in [&mut self.xs, &mut self.ys, &mut self.zs]
+            .into_iter()
+            .enumerate()
+        {
+            out.clear();
+            out.par_extend(items.par_iter().map(|&i| positions[i as usize][axis]));
+            out.extend([f32::MAX; LANES - 1]);
+        }
     }
 
-    /// Calls `f(j, p_j)` for every point within `radius` of `p` (radius ≤ the cell edge),
-    /// in a fixed order.
-    #[inline]
-    pub fn for_each_within(&self, p: Vec3, radius: f32, mut f: impl FnMut(usize, Vec3, f32)) {
-        let r2 = radius * radius;
-        self.for_each_range(p, |a, b| {
-            for (k, q) in self.sorted[a..b].iter().enumerate() {
-                let d2 = p.distance_squared(*q);
-                if d2 < r2 {
-                    f(self.items[a + k] as usize, *q, d2);
+    /// Writes into `out` the indices of the (at most) `k` points nearest `p` strictly
+    /// within `radius` (radius ≤ the one the grid was built for), leaving out index
+    /// `skip`; returns how many. Ties at the k-th distance are broken by the fixed walk
+    /// order, and the order of the result is a fixed function of `p` and the grid.
+    pub fn nearest(&self, p: Vec3, radius: f32, k: usize, skip: usize, out: &mut [u32]) -> usize {
+        let k = k.min(MAX_K).min(out.len());
+        if k == 0 || self.items.is_empty() {
+            return 0;
+        }
+        let mut best = Nearest {
+            at: out,
+            d2: [0.0; MAX_K],
+            len: 0,
+            k,
+            bound: radius * radius,
+            worst: 0,
+        };
+        let c = self.cell_of(p);
+        let scan = Scan {
+            xs: &self.xs,
+            ys: &self.ys,
+            zs: &self.zs,
+            items: &self.items,
+            p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
+            skip: skip as u32,
+        };
+        if self.cell >= radius {
+            // Cells as large as the radius: the 27 around p hold every neighbour, and
+            // stopping early would need k inside p's own cell, which the cell choice
+            // makes rare. One pass over 9 rows of 3 cells, rows beyond the bound skipped.
+            self.walk_cube(p, c, &scan, &mut best);
+        } else {
+            self.walk_rings(p, c, radius, &scan, &mut best);
+        }
+        best.len
+    }
+
+    fn walk_cube(&self, p: Vec3, c: IVec3, scan: &Scan, best: &mut Nearest) {
+        let (d, o) = (self.dims, self.origin);
+        let (x0, x1) = ((c.x - 1).max(0) as usize, (c.x + 1).min(d.x - 1) as usize);
+        for z in (c.z - 1).max(0)..=(c.z + 1).min(d.z - 1) {
+            let dz2 = self.slab_d2(p.z, o.z, z);
+            for y in (c.y - 1).max(0)..=(c.y + 1).min(d.y - 1) {
+                if dz2 + self.slab_d2(p.y, o.y, y) >= best.bound {
+                    continue;
+                }
+                let row = (d.x * (y + d.y * z)) as usize;
+                let s = self.starts[row + x0] as usize;
+                let e = self.starts[row + x1 + 1] as usize;
+                scan.run(s, e, best);
+            }
+        }
+    }
+
+    /// Cells smaller than the radius (a crowd): rings of cells at growing Chebyshev
+    /// distance from p's cell, stopping once no unvisited cell can hold a point nearer
+    /// than the k found.
+    fn walk_rings(&self, p: Vec3, c: IVec3, radius: f32, scan: &Scan, best: &mut Nearest) {
+        let (d, o) = (self.dims, self.origin);
+        // Distance from p to the nearest face of its own cell: ring q + 1 and beyond lie
+        // at least q cells plus this far away.
+        let lo = o + c.as_vec3() * self.cell;
+        let margin = (p - lo)
+            .min(lo + Vec3::splat(self.cell) - p)
+            .max(Vec3::ZERO)
+            .min_element();
+        for q in 0.. {
+            if q > 0 && (q - 1) as f32 * self.cell + margin >= radius {
+                break;
+            }
+            // The cells at Chebyshev distance exactly q from c (clipped to the grid), row
+            // by row in a fixed order; rows whose slab lies beyond the bound are skipped
+            // and the others trimmed to the cells the bound's sphere reaches.
+            for z in (c.z - q).max(0)..=(c.z + q).min(d.z - 1) {
+                let z_face = (z - c.z).abs() == q;
+                let dz2 = self.slab_d2(p.z, o.z, z);
+                for y in (c.y - q).max(0)..=(c.y + q).min(d.y - 1) {
+                    let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
+                    if dyz2 >= best.bound {
+                        continue;
+                    }
+                    let w = (best.bound - dyz2).sqrt();
+                    let reach_lo = floor_i32((p.x - w - o.x) * self.inv_cell);
+                    let reach_hi = floor_i32((p.x + w - o.x) * self.inv_cell);
+                    let row = (d.x * (y + d.y * z)) as usize;
+                    let full = z_face || (y - c.y).abs() == q;
+                    // A full row, or its two end cells.
+                    let ends = if full {
+                        [(c.x - q, c.x + q), (1, 0)]
+                    } else {
+                        [(c.x - q, c.x - q), (c.x + q, c.x + q)]
+                    };
+                    for (a, b) in ends {
+                        let (a, b) = (a.max(reach_lo).max(0), b.min(reach_hi).min(d.x - 1));
+                        if a <= b {
+                            let s = self.starts[row + a as usize] as usize;
+                            let e = self.starts[row + b as usize + 1] as usize;
+                            scan.run(s, e, best);
+                        }
+                    }
                 }
             }
-        });
+            if best.len == best.k {
+                let reach = q as f32 * self.cell + margin;
+                if best.bound <= reach * reach {
+                    break;
+                }
+            }
+        }
     }
 
-    /// Calls `f(j)` for every indexed point in the 27 cells around `p` (a superset of the
-    /// points within one cell edge of `p`; callers test the distance).
-    #[inline]
-    pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(usize)) {
-        self.for_each_range(p, |a, b| {
-            for &j in &self.items[a..b] {
-                f(j as usize);
-            }
-        });
+    /// Squared distance from coordinate `v` to cell `i`'s slab along one axis.
+    #[inline(always)]
+    fn slab_d2(&self, v: f32, origin: f32, i: i32) -> f32 {
+        let lo = origin + i as f32 * self.cell;
+        let d = (lo - v).max(v - (lo + self.cell)).max(0.0);
+        d * d
     }
+}
 
-    /// The 9 runs of `items` covering the 27 cells around `p`.
-    #[inline]
-    fn for_each_range(&self, p: Vec3, mut f: impl FnMut(usize, usize)) {
-        let c = self.cell_of(p);
-        let x0 = (c.x - 1).max(0);
-        let x1 = (c.x + 1).min(self.dims.x - 1);
-        for z in (c.z - 1).max(0)..=(c.z + 1).min(self.dims.z - 1) {
-            for y in (c.y - 1).max(0)..=(c.y + 1).min(self.dims.y - 1) {
-                let a = self.starts[self.index(IVec3::new(x0, y, z))] as usize;
-                let b = self.starts[self.index(IVec3::new(x1, y, z)) + 1] as usize;
-                f(a, b);
+/// `floor` as an integer without a libm call (x86-64 without SSE4.1 has no floor
+/// instruction); saturates far outside the grid, where callers clamp anyway.
+#[inline(always)]
+fn floor_i32(v: f32) -> i32 {
+    let t = v as i32;
+    if (t as f32) > v { t - 1 } else { t }
+}
+
+/// A query's view of the sorted arrays.
+struct Scan<'a> {
+    xs: &'a [f32],
+    ys: &'a [f32],
+    zs: &'a [f32],
+    items: &'a [u32],
+    p: (Vec4, Vec4, Vec4),
+    skip: u32,
+}
+
+impl Scan<'_> {
+    /// Offers every point of the sorted run `a..b` nearer than the current bound. Four
+    /// candidates at a time in SIMD lanes (glam's `Vec4`: SSE2 on x86-64, NEON on ARM,
+    /// scalar elsewhere; the same arithmetic in every lane, so the same results): most
+    /// candidates fail the test, and a failing group costs a handful of instructions.
+    #[inline(always)]
+    fn run(&self, a: usize, b: usize, best: &mut Nearest) {
+        let (px, py, pz) = self.p;
+        // The arrays are padded by LANES - 1 far points, so a group may run past b;
+        // those lanes are masked off.
+        let end = b + LANES - 1;
+        let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
+        let mut l = a;
+        while l < b {
+            let g = l - a;
+            let dx = Vec4::from_slice(&xs[g..]) - px;
+            let dy = Vec4::from_slice(&ys[g..]) - py;
+            let dz = Vec4::from_slice(&zs[g..]) - pz;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let mut hits = d2.cmplt(Vec4::splat(best.bound)).bitmask();
+            if b - l < LANES {
+                hits &= (1 << (b - l)) - 1;
             }
+            while hits != 0 {
+                let m = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let d = d2[m];
+                // The bound may have tightened since the group was tested.
+                let j = self.items[l + m];
+                if d < best.bound && j != self.skip {
+                    best.offer(j, d);
+                }
+            }
+            l += LANES;
         }
     }
 }
@@ -138,64 +393,70 @@ mod tests {
     use super::*;
     use crate::math::Rng;
 
-    fn check(pts: &[Vec3], r: f32) {
+    /// The grid's answer against brute force: the same set of neighbours (the k nearest
+    /// within r, ties aside).
+    fn check(pts: &[Vec3], r: f32, k: usize) {
         let mut g = Grid::default();
         g.build(pts, r);
+        let mut out = [0u32; MAX_K];
         for i in (0..pts.len()).step_by(7) {
-            let mut found = Vec::new();
-            g.for_each_near(pts[i], |j| {
-                if pts[j].distance(pts[i]) < r {
-                    found.push(j)
-                }
-            });
-            let mut within = Vec::new();
-            g.for_each_within(pts[i], r, |j, q, d2| {
-                assert_eq!(q, pts[j]);
-                assert!((d2 - q.distance_squared(pts[i])).abs() < 1e-9);
-                within.push(j)
-            });
-            within.sort();
-            let mut brute: Vec<usize> = (0..pts.len())
-                .filter(|&j| pts[j].distance(pts[i]) < r)
-                .collect();
+            let len = g.nearest(pts[i], r, k, i, &mut out);
+            let mut found: Vec<usize> = out[..len].iter().map(|&j| j as usize).collect();
             found.sort();
-            brute.sort();
-            assert_eq!(found, brute);
-            assert_eq!(within, brute);
+            let mut brute: Vec<(f32, usize)> = (0..pts.len())
+                .filter(|&j| j != i && pts[j].distance_squared(pts[i]) < r * r)
+                .map(|j| (pts[j].distance_squared(pts[i]), j))
+                .collect();
+            brute.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert_eq!(len, brute.len().min(k), "point {i}");
+            if brute.len() > k && brute[k - 1].0 == brute[k].0 {
+                continue; // a tie at the boundary: either is right
+            }
+            let mut want: Vec<usize> = brute.iter().take(k).map(|b| b.1).collect();
+            want.sort();
+            assert_eq!(found, want, "point {i}");
         }
     }
 
-    #[test]
-    fn finds_exactly_the_neighbours_brute_force_finds() {
-        let mut rng = Rng::new(1, 1, 1);
-        let pts: Vec<Vec3> = (0..2000)
+    fn cloud(seed: u64, n: usize, half: f32) -> Vec<Vec3> {
+        let mut rng = Rng::new(seed, 1, 1);
+        (0..n)
             .map(|_| {
                 Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
+                    rng.range(-half, half),
+                    rng.range(-half, half),
+                    rng.range(-half, half),
                 )
             })
-            .collect();
-        check(&pts, 0.1);
+            .collect()
+    }
+
+    #[test]
+    fn finds_exactly_the_nearest_neighbours_brute_force_finds() {
+        let pts = cloud(1, 2000, 1.0);
+        check(&pts, 0.1, 16);
+        check(&pts, 0.3, 16);
+        check(&pts, 0.3, 1);
+    }
+
+    #[test]
+    fn a_crowd_shrinks_the_cells_and_keeps_the_answer() {
+        // 20,000 points in a 20 cm cube (2.5 million per m³) and a sparse halo.
+        let mut pts = cloud(3, 20_000, 0.1);
+        pts.extend(cloud(4, 200, 0.5));
+        let mut g = Grid::default();
+        g.build(&pts, 0.15);
+        assert!(g.cell() < 0.15 * 0.3, "cell {} m", g.cell());
+        check(&pts, 0.15, 16);
     }
 
     #[test]
     fn widely_spread_points_and_outliers_still_work() {
-        let mut rng = Rng::new(2, 1, 1);
-        let mut pts: Vec<Vec3> = (0..1000)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-0.5, 0.5),
-                    rng.range(-0.5, 0.5),
-                    rng.range(-0.5, 0.5),
-                )
-            })
-            .collect();
+        let mut pts = cloud(2, 1000, 0.5);
         pts.push(Vec3::new(500.0, -300.0, 1e4));
         pts.push(Vec3::new(500.0, -300.0, 1e4)); // coincident
-        check(&pts, 0.05);
-        check(&[Vec3::ONE], 0.1);
-        check(&[], 0.1);
+        check(&pts, 0.05, 16);
+        check(&[Vec3::ONE], 0.1, 16);
+        check(&[], 0.1, 16);
     }
 }

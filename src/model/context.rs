@@ -25,39 +25,39 @@ pub struct Neighbour {
     pub pressure: f32,
 }
 
-/// Neighbours cached per agent by the gather pass for the step pass: one grid walk per
-/// substep instead of two. An agent with more neighbours than fit falls back to the grid.
-pub const CACHED_NEIGHBOURS: usize = 40;
+/// The most neighbours an agent interacts with: the nearest within its model's radius
+/// (topological interaction; docs/model.md, "Bounded neighbours"). In a sparse cloud every
+/// neighbour within the radius counts; in a crowd the nearest 16, so a step costs about
+/// the same per agent at any density.
+pub const MAX_NEIGHBOURS: usize = 16;
 
+/// An agent's neighbours, listed once per substep by the gather pass for the step pass.
 #[derive(Clone, Copy)]
 pub struct NeighbourList {
     len: u8,
-    overflow: bool,
-    idx: [u32; CACHED_NEIGHBOURS],
+    idx: [u32; MAX_NEIGHBOURS],
 }
 
 impl Default for NeighbourList {
     fn default() -> Self {
         NeighbourList {
             len: 0,
-            overflow: false,
-            idx: [0; CACHED_NEIGHBOURS],
+            idx: [0; MAX_NEIGHBOURS],
         }
     }
 }
 
 impl NeighbourList {
-    pub(crate) fn clear(&mut self) {
-        self.len = 0;
-        self.overflow = false;
+    /// Lists the (at most `MAX_NEIGHBOURS`) agents nearest `p` within `radius`, other than
+    /// agent `me`.
+    pub(crate) fn fill(&mut self, grid: &Grid, p: Vec3, radius: f32, me: usize) {
+        self.len = grid.nearest(p, radius, MAX_NEIGHBOURS, me, &mut self.idx) as u8;
     }
-    pub(crate) fn push(&mut self, j: usize) {
-        if (self.len as usize) < CACHED_NEIGHBOURS {
-            self.idx[self.len as usize] = j as u32;
-            self.len += 1;
-        } else {
-            self.overflow = true;
-        }
+
+    /// Global indices of the listed neighbours.
+    #[inline]
+    pub(crate) fn indices(&self) -> &[u32] {
+        &self.idx[..self.len as usize]
     }
 }
 
@@ -98,7 +98,6 @@ pub struct Context<'a> {
     /// Every agent's neighbour record (previous state), by global index.
     pub agents: &'a [Neighbour],
     pub(crate) lists: &'a [NeighbourList],
-    pub(crate) grid: &'a Grid,
 }
 
 impl Context<'_> {
@@ -109,24 +108,19 @@ impl Context<'_> {
         Rng::new(self.seed ^ stream, i as u64, self.step)
     }
 
-    /// Every other agent within `reach` of agent i, in grid order (so sums are the same
-    /// whatever the number of threads): `f(j, position, squared distance)`. `reach` must
-    /// not exceed the one the gather pass listed neighbours with (the model's reach plus
-    /// both body radii); further agents are not listed.
+    /// Agent i's neighbours within `reach`, in a fixed order (so sums are the same
+    /// whatever the number of threads): `f(j, position, squared distance)`. They are at
+    /// most [`MAX_NEIGHBOURS`], the nearest, listed by the gather pass within the model's
+    /// reach plus both body radii; `reach` must not exceed that.
     #[inline(always)]
     pub fn for_each_neighbour(&self, i: usize, reach: f32, mut f: impl FnMut(usize, Vec3, f32)) {
         let p = self.agents[i].pos;
-        let n = &self.lists[i];
-        if n.overflow {
-            self.grid.for_each_within(p, reach, |j, pj, d2| {
-                if j != i {
-                    f(j, pj, d2)
-                }
-            });
-        } else {
-            for &j in &n.idx[..n.len as usize] {
-                let pj = self.agents[j as usize].pos;
-                f(j as usize, pj, p.distance_squared(pj));
+        let r2 = reach * reach;
+        for &j in self.lists[i].indices() {
+            let pj = self.agents[j as usize].pos;
+            let d2 = p.distance_squared(pj);
+            if d2 < r2 {
+                f(j as usize, pj, d2);
             }
         }
     }

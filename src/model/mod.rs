@@ -204,7 +204,7 @@ pub trait Model: Sized + Send + Sync {
     /// model draws the rest of its state from the same stream.
     fn spawn(&self, start: &Start, rng: &mut Rng) -> Self::Agent;
 
-    /// Gather pass, per neighbour within reach: a term of the sum (`ri` is this agent's
+    /// Gather pass, per listed neighbour and once for the agent itself (at `d2` = 0): a term of the sum (`ri` is this agent's
     /// body radius, `d2` the squared distance).
     fn gather_term(&self, _ri: f32, _other: &Neighbour, _d2: f32) -> f32 {
         0.0

@@ -24,10 +24,6 @@ pub fn spawn_box(count: i64) -> ([f64; 3], [f64; 3]) {
     let y = SPAWN_CENTER[1].max(side / 2.0);
     ([SPAWN_CENTER[0], y, SPAWN_CENTER[2]], [side; 3])
 }
-/// `check` warns when a swarm starts with more than this many neighbours, on average,
-/// within its model's neighbour radius: beyond it each agent's neighbour sums and the
-/// neighbour cache (40 entries) overflow, and a step costs many times more per agent.
-pub const CROWDED_NEIGHBOURS: f64 = 40.0;
 /// Default soft bounds: the spawn box grown by this margin on every side, m.
 pub const BOUNDS_MARGIN: f64 = 1.5;
 

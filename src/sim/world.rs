@@ -103,16 +103,16 @@ impl<M: Model> Swarm for Runner<M> {
                 let i = start + k;
                 let me = &agents[i];
                 let ri = me.radius;
+                list.fill(grid, me.pos, m.reach() + ri + max_body_radius, i);
                 let mut sum = 0.0;
-                list.clear();
-                grid.for_each_within(me.pos, m.reach() + ri + max_body_radius, |j, _, d2| {
-                    if j != i {
-                        list.push(j);
+                if M::GATHERS {
+                    // The agent's own term, then its neighbours'.
+                    sum += m.gather_term(ri, me, 0.0);
+                    for &j in list.indices() {
+                        let o = &agents[j as usize];
+                        sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
                     }
-                    if M::GATHERS {
-                        sum += m.gather_term(ri, &agents[j], d2);
-                    }
-                });
+                }
                 *g = if M::GATHERS {
                     m.gather_finish(targets, me.pos, ri, sum)
                 } else {
@@ -538,7 +538,6 @@ impl Simulation {
             max_body_radius: self.max_body_radius,
             agents: &self.agents,
             lists: &self.lists,
-            grid: &self.grid,
         };
         for swarm in &mut self.swarms {
             swarm.step(&cx, self.cancel);
