@@ -24,7 +24,8 @@ class BEESWARM_PT_panel(bpy.types.Panel):
             col.operator("preferences.addon_show", text="Set Binary Path",
                          icon="PREFERENCES").module = __package__
         else:
-            box.label(text=f"beeswarm: {path.name} ({path.parent.name})", icon="CHECKMARK")
+            where = "bundled" if path == binary.bundled() else str(path.parent)
+            box.label(text=f"beeswarm: {path.name} ({where})", icon="CHECKMARK")
 
         layout.prop(s, "source", expand=True)
         if s.source == "FILE":

@@ -27,6 +27,10 @@ import blender_addon  # noqa: E402
 from blender_addon import binary, importer, props, runner, shot_builder  # noqa: E402
 
 TOL = 1e-4  # metres
+# Blender's name for this machine's platform (extension manifests' `platforms`).
+PLATFORM = {"linux": "linux", "darwin": "macos", "win32": "windows"}.get(sys.platform, sys.platform) \
+    + "-" + {"x86_64": "x64", "amd64": "x64", "aarch64": "arm64", "arm64": "arm64"}.get(
+        __import__("platform").machine().lower(), __import__("platform").machine().lower())
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -272,6 +276,16 @@ def test_binary_discovery(tmp_path, monkeypatch):
     assert binary.discover(addon_dir, use_cache=False) == on_path
     assert binary.resolve(str(tmp_path / "missing"))[0] is None
     assert binary.resolve(str(exe))[0] == exe
+    # A binary bundled in the extension (bin/ beside the add-on) comes before PATH; the
+    # installer drops file modes, so it is made executable on first use.
+    packed = addon_dir / "bin" / binary.EXE
+    packed.parent.mkdir()
+    packed.write_text("#!/bin/sh\n")
+    packed.chmod(0o644)
+    assert binary.discover(addon_dir, use_cache=False) == packed
+    assert os.access(packed, os.X_OK)
+    # An explicit path (the operator's or the preference) still wins.
+    assert binary.resolve(str(on_path))[0] == on_path
 
 
 # ---------------------------------------------------------------------------------------
@@ -646,6 +660,76 @@ def test_enables_as_an_extension_and_reads_its_preference(tmp_path):
         env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert f"REPORTED: Error: No beeswarm binary at {missing}" in r.stdout
+
+
+INSTALL_ZIP_AND_BAKE = r'''
+import os, pathlib, shutil, sys, bpy
+zip_path, workdir = sys.argv[-2:]
+assert shutil.which("beeswarm") is None, "the test needs a PATH without beeswarm"
+assert bpy.ops.extensions.package_install_files(
+    filepath=zip_path, repo="user_default", enable_on_install=True) == {"FINISHED"}
+module = "bl_ext.user_default.beeswarm"
+assert module in bpy.context.preferences.addons, list(bpy.context.preferences.addons.keys())
+binary = sys.modules[module + ".binary"]
+print("BINARY:", binary.resolve("")[0])
+sc = bpy.context.scene
+sc.frame_start, sc.frame_end = 1, 12
+sc.beeswarm.shot_name = "installed"
+sc.beeswarm.count = 20
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(workdir, "scene.blend"))
+assert bpy.ops.beeswarm.bake(format="USD") == {"FINISHED"}
+sc.frame_set(6)
+dg = bpy.context.evaluated_depsgraph_get()
+clouds = [o for o in bpy.data.collections["installed"].all_objects if o.type == "POINTCLOUD"]
+# One prototype root (no parent) per drawn bee.
+print("POINTS:", [len({tuple(i.persistent_id) for i in dg.object_instances
+                       if i.is_instance and i.parent and i.parent.original == o
+                       and i.object.original.parent is None}) for o in clouds])
+print("MESSAGE:", sc.beeswarm.last_message)
+'''
+
+
+@pytest.fixture(scope="module")
+def extension_zip(beeswarm_bin, tmp_path_factory):
+    """The extension zip scripts/build-extension makes from the binary under test, packed
+    with this bpy's own extension tool."""
+    out = tmp_path_factory.mktemp("extension")
+    r = subprocess.run([str(ROOT / "scripts" / "build-extension"), "--binary", beeswarm_bin,
+                        "--out", str(out)], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "BEESWARM_BPY_PYTHON": sys.executable, "BLENDER": ""})
+    assert r.returncode == 0, r.stdout + r.stderr
+    zips = list(out.glob("*.zip"))
+    assert [z.name for z in zips] == [r.stdout.strip().splitlines()[-1].rsplit("/", 1)[-1]]
+    return zips[0]
+
+
+def test_extension_zip_holds_the_binary_for_this_platform(extension_zip):
+    import zipfile
+    with zipfile.ZipFile(extension_zip) as z:
+        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        names = set(z.namelist())
+    assert manifest["platforms"] == [PLATFORM] and extension_zip.name.endswith(
+        PLATFORM.replace("-", "_") + ".zip")
+    assert f"bin/{binary.EXE}" in names and "__init__.py" in names
+    assert not [n for n in names if "__pycache__" in n]
+
+
+def test_installed_zip_bakes_with_its_bundled_binary(extension_zip, tmp_path):
+    """Install from Disk, as a user would (extensions.package_install_files), in a Blender
+    whose PATH has no beeswarm: the first bake works with the binary inside the zip."""
+    work = tmp_path / "work"
+    work.mkdir()
+    r = subprocess.run(
+        [sys.executable, "-c", INSTALL_ZIP_AND_BAKE, str(extension_zip), str(work)],
+        capture_output=True, text=True, timeout=300,
+        env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res"),
+             "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    installed = tmp_path / "res" / "extensions" / "user_default" / "beeswarm" / "bin" / binary.EXE
+    assert f"BINARY: {installed}" in r.stdout, r.stdout
+    assert "POINTS: [20]" in r.stdout, r.stdout + r.stderr
+    assert "MESSAGE: Baked installed" in r.stdout
+    assert (work / "beeswarm_cache" / "installed" / "installed.usda").is_file()
 
 
 # ---------------------------------------------------------------------------------------
