@@ -151,7 +151,7 @@ def align_gltf_time(actions, fps, frame_start):
 
 
 def _supported(op, **kwargs):
-    """Only the options this Blender's importer has (4.2 lacks some of 5.0's)."""
+    """Only the options this Blender's importer has (older ones lack some of 5.0's)."""
     props = op.get_rna_type().properties
     return {k: v for k, v in kwargs.items() if k in props}
 

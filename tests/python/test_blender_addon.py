@@ -435,29 +435,70 @@ def usd_instancer(name):
     return pcs[0]
 
 
-def usd_instances(name, frame):
-    """{bee id: (Blender world position, instance velocity attr)} at a frame."""
-    sc = bpy.context.scene
-    sc.frame_set(frame)
-    dg = bpy.context.evaluated_depsgraph_get()
-    inst = usd_instancer(name)
-    geometry_set = inst.evaluated_get(dg).evaluated_geometry()  # keeps geo alive
-    geo = geometry_set.instances_pointcloud()
+# Blender 4.4 (the oldest the manifest claims) has no Python access to instance attributes
+# (Object.evaluated_geometry() is newer). There a last, temporary modifier turns the
+# instances into points (Instances to Points carries their attributes over) whose evaluated
+# point cloud Python can read.
+HAS_GEOMETRY_SET = hasattr(bpy.types.Object, "evaluated_geometry")
+PROBE_MODIFIER = "beeswarm test: instances to points"
+
+
+def expose_instances(obs):
+    if HAS_GEOMETRY_SET:
+        return
+    ng = bpy.data.node_groups.get(PROBE_MODIFIER)
+    if ng is None:
+        ng = bpy.data.node_groups.new(PROBE_MODIFIER, "GeometryNodeTree")
+        ng.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        ng.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+        gin, gout = ng.nodes.new("NodeGroupInput"), ng.nodes.new("NodeGroupOutput")
+        to_points = ng.nodes.new("GeometryNodeInstancesToPoints")
+        ng.links.new(gin.outputs[0], to_points.inputs["Instances"])
+        ng.links.new(to_points.outputs["Points"], gout.inputs[0])
+    for ob in obs:
+        if PROBE_MODIFIER not in ob.modifiers:
+            ob.modifiers.new(PROBE_MODIFIER, "NODES").node_group = ng
+
+
+def read_instances(ob_eval, depsgraph):
+    """(ids, velocities [n, 3], {id: Blender world position}) of an evaluated instancer
+    (after expose_instances)."""
+    if HAS_GEOMETRY_SET:
+        geometry_set = ob_eval.evaluated_geometry()  # keeps the geometry alive
+        geo = geometry_set.instances_pointcloud()
+    else:
+        geo = ob_eval.data
     n = len(geo.points)
     ids = np.zeros(n, np.int32)
     geo.attributes["id"].data.foreach_get("value", ids)
     vel = np.zeros(n * 3, np.float32)
     geo.attributes["velocity"].data.foreach_get("vector", vel)
-    vel = vel.reshape(n, 3)
-    # Instance positions from the depsgraph (the instances' own "position" attribute is a
-    # virtual one that reads back unreliably): the prototype's root object (no parent) once
-    # per instance. Its persistent id is the instance's `id` attribute: the bee's id.
     positions = {}
-    for i in dg.object_instances:
-        if i.is_instance and i.parent and i.parent.original == inst and \
-                i.object.original.parent is None:
-            positions[i.persistent_id[1]] = i.matrix_world.translation.copy()
+    if HAS_GEOMETRY_SET:
+        # From the depsgraph (the instances' own "position" attribute is a virtual one that
+        # reads back unreliably): the prototype's root object (no parent) once per
+        # instance. Its persistent id is the instance's `id` attribute: the bee's id.
+        for i in depsgraph.object_instances:
+            if i.is_instance and i.parent and i.parent.original == ob_eval.original and \
+                    i.object.original.parent is None:
+                positions[i.persistent_id[1]] = i.matrix_world.translation.copy()
+    else:
+        pos = np.zeros(n * 3, np.float32)
+        geo.attributes["position"].data.foreach_get("vector", pos)
+        for bee, p in zip(ids, pos.reshape(n, 3)):
+            positions[int(bee)] = ob_eval.matrix_world @ Vector(p)
     assert sorted(positions) == sorted(int(b) for b in ids)
+    return ids, vel.reshape(n, 3), positions
+
+
+def usd_instances(name, frame):
+    """{bee id: (Blender world position, instance velocity attr)} at a frame."""
+    inst = usd_instancer(name)
+    expose_instances([inst])
+    sc = bpy.context.scene
+    sc.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    ids, vel, positions = read_instances(inst.evaluated_get(dg), dg)
     return {int(b): (positions[int(b)], v) for b, v in zip(ids, vel)}
 
 
@@ -635,7 +676,8 @@ def test_manifest_validates_with_blenders_extension_tool():
     assert r.returncode == 0, r.stdout + r.stderr
     manifest = tomllib.loads((ROOT / "blender_addon" / "blender_manifest.toml").read_text())
     assert manifest["id"] == "beeswarm" and manifest["schema_version"] == "1.0.0"
-    assert manifest["blender_version_min"] == "4.2.0"
+    # 4.4: Blender 4.2 and 4.3 import a PointInstancer without its animation (docs/blender.md).
+    assert manifest["blender_version_min"] == "4.4.0"
 
 
 ENABLE_AS_EXTENSION = r'''
@@ -782,19 +824,8 @@ class ProbeEngine(bpy.types.RenderEngine):
     def _look(self, depsgraph, key):
         for ob in depsgraph.objects:
             if ob.type == "POINTCLOUD":
-                gs = ob.evaluated_geometry()
-                ip = gs.instances_pointcloud()
-                n = len(ip.points)
-                v = np.zeros(n * 3, np.float32)
-                ip.attributes["velocity"].data.foreach_get("vector", v)
-                ids = np.zeros(n, np.int32)
-                ip.attributes["id"].data.foreach_get("value", ids)
-                # The prototype's root object, once per bee, by persistent id (= bee id).
-                pos = {i.persistent_id[1]: tuple(i.matrix_world.translation)
-                       for i in depsgraph.object_instances
-                       if i.is_instance and i.parent and i.parent.name == ob.name
-                       and i.object.original.parent is None}
-                ProbeEngine.seen[key] = (ids, v.reshape(n, 3), pos)
+                ids, v, pos = read_instances(ob, depsgraph)
+                ProbeEngine.seen[key] = (ids, v, {b: tuple(p) for b, p in pos.items()})
 
     def render(self, depsgraph):
         f = depsgraph.scene.frame_current
@@ -813,6 +844,8 @@ def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
     scene.collection.objects.link(cam)
     scene.camera = cam
+    expose_instances([o for o in bpy.data.collections["bltest"].all_objects
+                      if o.type == "POINTCLOUD"])
     bpy.utils.register_class(ProbeEngine)
     try:
         scene.render.engine = ProbeEngine.bl_idname
@@ -995,19 +1028,14 @@ def test_shot_file_with_two_swarms(scene, beeswarm_bin, tmp_path):
     coll = bpy.data.collections["two"]
     instancers = {o.name: o for o in coll.all_objects if o.type == "POINTCLOUD"}
     assert sorted(instancers) == ["far", "near"]
+    expose_instances(instancers.values())
     scene.frame_set(12)
     dg = bpy.context.evaluated_depsgraph_get()
     seen = {}
     for name, ob in instancers.items():
-        gs = ob.evaluated_get(dg).evaluated_geometry()
-        ip = gs.instances_pointcloud()
-        n = len(ip.points)
-        ids = np.zeros(n, np.int32)
-        ip.attributes["id"].data.foreach_get("value", ids)
-        vel = np.zeros(n * 3, np.float32)
-        ip.attributes["velocity"].data.foreach_get("vector", vel)
-        seen[name] = n
-        for bee, v in zip(ids, vel.reshape(n, 3)):
+        ids, vel, _ = read_instances(ob.evaluated_get(dg), dg)
+        seen[name] = len(ids)
+        for bee, v in zip(ids, vel):
             row = tracks[int(bee)][12]
             assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
     assert seen == {"near": 15, "far": 25}
