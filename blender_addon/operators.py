@@ -9,6 +9,7 @@ completion synchronously.
 import atexit
 import os
 import pathlib
+import shutil
 import tempfile
 import time
 
@@ -31,19 +32,42 @@ def _blend_dir():
     return pathlib.Path(path).parent if path else None
 
 
-def _temp_dir():
-    d = pathlib.Path(tempfile.gettempdir()) / "beeswarm"
+def _unsaved_dir():
+    """Where an unsaved file's shots and caches go: a folder in Blender's own temporary
+    directory for this session (`bpy.app.tempdir`, one per running Blender, so per open
+    file; Blender removes it when it quits), never a folder shared by every Blender."""
+    d = pathlib.Path(bpy.app.tempdir or tempfile.gettempdir()) / "beeswarm_unsaved"
     d.mkdir(parents=True, exist_ok=True)
     return d
 
 
 def cache_dir(settings, shot_name):
+    """`<cache folder>/<shot>/`: by default `//beeswarm_cache/<shot>/` beside the .blend;
+    for an unsaved file (where `//` means nothing) under Blender's temporary directory."""
     raw = settings.cache_dir or "//beeswarm_cache/"
     if raw.startswith("//") and not bpy.data.filepath:
-        base = _temp_dir() / "cache"
+        base = _unsaved_dir() / "beeswarm_cache"
     else:
         base = pathlib.Path(bpy.path.abspath(raw))
     return base / shot_name
+
+
+def staging_dir(out_dir):
+    """The folder a bake writes into before it replaces the cache (same file system, so
+    the final renames are cheap and a cancelled bake leaves the cache untouched)."""
+    return out_dir.parent / f".{out_dir.name}.baking"
+
+
+def _replace_path(src, dst):
+    """Moves src over dst (a file, or a folder such as `<name>.clips/`)."""
+    if src.is_dir() and dst.exists():
+        old = dst.with_name(f".{dst.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(dst, old)
+        os.replace(src, dst)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(src, dst)
 
 
 def _written_by_addon(path):
@@ -60,6 +84,7 @@ def _kill_running_bake():
     job = _active["job"]
     if job is not None and job.process is not None and job.process.running():
         job.process.cancel(grace=0.5)
+        job.discard()
 
 
 atexit.register(_kill_running_bake)
@@ -77,6 +102,7 @@ class Job:
         if bin_path is None:
             raise BakeError(msg)
         self.binary = bin_path
+        self.shot_text = None
         if op.shot_path:
             shot = pathlib.Path(bpy.path.abspath(op.shot_path))
             if not shot.is_file():
@@ -87,7 +113,7 @@ class Job:
                 # The binary reports it with line and column; let it speak.
                 self.name, self.fps, self.frames = shot.stem, None, None
                 self.info_error = str(e)
-            self.shot_path = shot
+            self.bake_shot = shot
         else:
             try:
                 shot, self.warnings = shot_builder.build_shot(scene, self.settings)
@@ -96,34 +122,56 @@ class Job:
             self.name = shot["scene"]["name"]
             self.fps = shot["scene"]["fps"]
             self.frames = tuple(shot["scene"]["frames"])
-            folder = _blend_dir() or _temp_dir()
-            self.shot_path = folder / f"{self.name}.shot.toml"
             source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
-            text = shot_builder.shot_toml(shot, source)
-            if self.shot_path.exists() and not _written_by_addon(self.shot_path):
-                raise BakeError(f"{self.shot_path} exists and was not written by the add-on; "
-                                f"give the shot another name (it would be overwritten)")
-            tmp = self.shot_path.with_name(self.shot_path.name + ".tmp")
-            tmp.write_text(text, encoding="utf-8")
-            os.replace(tmp, self.shot_path)
+            self.shot_text = shot_builder.shot_toml(shot, source)
         self.out_dir = cache_dir(self.settings, self.name)
-        self.out_dir.mkdir(parents=True, exist_ok=True)
+        # The shot built from the scene lives with its cache, `<cache>/<name>.shot.toml`,
+        # and both are replaced together only when the bake succeeds (commit()).
+        self.shot_path = (self.out_dir / f"{self.name}.shot.toml" if self.shot_text is not None
+                          else self.bake_shot)
+        if self.shot_text is not None and self.shot_path.exists() \
+                and not _written_by_addon(self.shot_path):
+            raise BakeError(f"{self.shot_path} exists and was not written by the add-on; "
+                            f"give the shot another name (it would be overwritten)")
+        self.staging = staging_dir(self.out_dir)
+        shutil.rmtree(self.staging, ignore_errors=True)  # a bake Blender never finished
+        self.staging.mkdir(parents=True)
+        if self.shot_text is not None:
+            self.bake_shot = self.staging / self.shot_path.name
+            self.bake_shot.write_text(self.shot_text, encoding="utf-8")
         fmt, _ = FORMAT_FILES[self.format]
-        self.argv = runner.bake_argv(self.binary, self.shot_path, self.out_dir, [fmt, "csv"])
+        self.argv = runner.bake_argv(self.binary, self.bake_shot, self.staging, [fmt, "csv"])
         self.process = None
         self.started = None
 
     def start(self):
         self.started = time.monotonic()
         try:
-            self.process = runner.BakeProcess(self.argv, cwd=str(self.shot_path.parent))
+            self.process = runner.BakeProcess(self.argv, cwd=str(self.bake_shot.parent))
         except OSError as e:
+            self.discard()
             raise BakeError(f"Cannot run {self.binary}: {e}") from None
+
+    def commit(self):
+        """After exit 0: every file the bake wrote (and the shot it baked) replaces its
+        namesake in the cache folder; then the staging folder goes."""
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        for p in sorted(self.staging.iterdir()):
+            if p.name.endswith(".tmp"):
+                continue
+            _replace_path(p, self.out_dir / p.name)
+        shutil.rmtree(self.staging, ignore_errors=True)
+
+    def discard(self):
+        """A failed or cancelled bake: its partial outputs and its shot go; the cache and
+        the shot beside it stay as they were."""
+        shutil.rmtree(self.staging, ignore_errors=True)
 
     def outputs(self):
         """(cache path, tracks CSV path) from the `done` event, else the expected names."""
         ext = FORMAT_FILES[self.format][1]
-        outs = [pathlib.Path(p) for p in (self.process.outputs or [])]
+        # The `done` event names the staging folder's files; they are in out_dir now.
+        outs = [self.out_dir / pathlib.Path(p).name for p in (self.process.outputs or [])]
         cache = next((p for p in outs if p.suffix in (ext, ".gltf")), None)
         csv = next((p for p in outs if p.name.endswith(".tracks.csv")), None)
         cache = cache or self.out_dir / f"{self.name}{ext}"
@@ -138,7 +186,7 @@ class Job:
         name = cache.name[: -len(cache.suffix)]
         fps, frames = self.fps, self.frames
         if fps is None or frames is None:
-            _, fps, frames = importer.shot_info(str(self.shot_path))
+            _, fps, frames = importer.shot_info(str(self.bake_shot))
 
         def after(collection, objects):
             if self.settings.instance_motion:
@@ -197,6 +245,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
                     break
         except BaseException:  # Ctrl-C in a background Blender: stop the bake too
             job.process.cancel()
+            job.discard()
             _active["job"] = None
             raise
         try:
@@ -224,6 +273,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
         job = self._job
         if event.type == "ESC" and event.value == "PRESS":
             job.process.cancel()
+            job.discard()
             self._end_modal(context)
             msg = f"Bake of {job.name} cancelled; the previous cache is unchanged"
             context.scene.beeswarm.last_message = msg
@@ -249,6 +299,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
     def cancel(self, context):  # Blender closing the window mid-bake
         if self._job is not None and self._job.process is not None:
             self._job.process.cancel()
+            self._job.discard()
         self._end_modal(context)
 
     # -- shared -------------------------------------------------------------------------------
@@ -276,7 +327,14 @@ class BEESWARM_OT_bake(bpy.types.Operator):
     def _complete(self, context, job):
         rc = job.process.returncode
         if rc != 0:
+            job.discard()
             self._fail(context, f"Bake failed: {job.failure()}")
+            return {"CANCELLED"}
+        try:
+            job.commit()
+        except OSError as e:
+            job.discard()
+            self._fail(context, f"Cannot move the new cache into {job.out_dir}: {e}")
             return {"CANCELLED"}
         try:
             coll = job.finish(context)
@@ -328,7 +386,7 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
             return {"CANCELLED"}
         for w in warnings:
             self.report({"WARNING"}, w)
-        path = self.filepath or str((_blend_dir() or _temp_dir())
+        path = self.filepath or str((_blend_dir() or _unsaved_dir())
                                     / f"{shot['scene']['name']}.shot.toml")
         path = pathlib.Path(bpy.path.abspath(path))
         if path.exists() and not _written_by_addon(path):

@@ -11,6 +11,7 @@ then Y, then Z about world axes (R = Rz·Ry·Rx), which is Blender's own 'XYZ' c
 import math
 import re
 
+import bpy
 from mathutils import Matrix, Vector
 
 from . import toml_writer
@@ -272,7 +273,9 @@ def build_shot(scene, settings, name=None):
     if preset == "FILE":
         if not settings.preset_file:
             raise ShotBuildError("Choose a preset file, or a built-in preset")
-        preset = settings.preset_file
+        # Absolute: the shot is written into the cache folder, and the binary reads a
+        # relative preset path from the shot file's folder, not the .blend's.
+        preset = bpy.path.abspath(settings.preset_file)
     elif not preset:
         raise ShotBuildError(f"Choose a preset of the {model} model")
     swarm = {

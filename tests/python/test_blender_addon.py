@@ -531,9 +531,10 @@ def test_usd_bake_imports_the_swarm_once_and_rebakes_in_place(scene, beeswarm_bi
     t0 = time.monotonic()
     assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
     print(f"USD bake + import: {time.monotonic() - t0:.2f} s")
-    assert (tmp_path / "bltest.shot.toml").is_file()
     cache_dir = tmp_path / "beeswarm_cache" / "bltest"
-    assert (cache_dir / "bltest.usda").is_file()
+    assert (cache_dir / "bltest.shot.toml").is_file() and (cache_dir / "bltest.usda").is_file()
+    assert not (tmp_path / "bltest.shot.toml").exists()
+    assert sorted(p.name for p in cache_dir.parent.iterdir()) == ["bltest"]  # no staging left
     assert len(shot_collections("bltest")) == 1 and "bltest" in bpy.data.collections
     assert (scene.render.fps, scene.render.fps_base) == (30, 1.0)
     assert (scene.frame_start, scene.frame_end) == (5, 40)
@@ -868,7 +869,8 @@ def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
 
 
 def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path):
-    mine = tmp_path / "bltest.shot.toml"
+    mine = tmp_path / "beeswarm_cache" / "bltest" / "bltest.shot.toml"
+    mine.parent.mkdir(parents=True)
     mine.write_text("# my hand-made shot\n[scene]\nname = \"bltest\"\n")
     with pytest.raises(RuntimeError, match="not written by the add-on"):
         bake("USD", fake_bin)
@@ -877,6 +879,50 @@ def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path
     assert bake("USD", fake_bin) == {"FINISHED"}
     assert bake("USD", fake_bin) == {"FINISHED"}  # its own file: rewritten
     assert mine.read_text().startswith(shot_builder.HEADER_MARK)
+
+
+def cache_state(folder):
+    """{file name: bytes} of a cache folder and whatever sits beside it."""
+    return {str(p.relative_to(folder.parent)): p.read_bytes()
+            for p in sorted(folder.parent.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("mode", ["fail", "partial"])
+def test_failed_bake_leaves_the_shot_and_the_cache_as_they_were(scene, fake_bin, tmp_path,
+                                                                monkeypatch, mode):
+    """The shot TOML lives in the cache folder and is replaced with the cache, only when a
+    bake succeeds: a failing bake (even one that wrote an output first) changes neither."""
+    shot_cylinder_scene(scene)
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    folder = tmp_path / "beeswarm_cache" / "bltest"
+    before = cache_state(folder)
+    assert "count = 40" in (folder / "bltest.shot.toml").read_text()
+    scene.beeswarm.count = 20000
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", mode)
+    with pytest.raises(RuntimeError, match="Bake failed"):
+        bake("USD", fake_bin)
+    assert cache_state(folder) == before
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "ok")
+    scene.beeswarm.count = 12
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    assert "count = 12" in (folder / "bltest.shot.toml").read_text()
+    assert len(read_tracks(folder / "bltest.tracks.csv")) == 12
+
+
+def test_unsaved_file_bakes_into_blenders_temp_directory(fake_bin, tmp_path):
+    """An unsaved file has no folder: its shot and cache go to a folder in Blender's own
+    temporary directory for this session, not a /tmp folder every Blender shares."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    assert not bpy.data.filepath
+    sc = bpy.context.scene
+    sc.frame_start, sc.frame_end = 1, 12
+    sc.beeswarm.shot_name = "unsaved"
+    sc.beeswarm.count = 5
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    folder = pathlib.Path(bpy.app.tempdir) / "beeswarm_unsaved" / "beeswarm_cache" / "unsaved"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "unsaved.bees.velocity.npy", "unsaved.shot.toml", "unsaved.tracks.csv", "unsaved.usda"]
+    assert str(folder / "unsaved.usda") in sc.beeswarm.last_message
 
 
 # ---------------------------------------------------------------------------------------
@@ -971,7 +1017,7 @@ def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch
     assert bake("USD", fake_bin) == {"FINISHED"}
     before = sorted(o.name for o in bpy.data.objects if o.get(importer.SHOT_TAG) == "bltest")
     cache = pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.usda"))
-    cached = cache.read_bytes()
+    before_files = cache_state(cache.parent)
     monkeypatch.setenv("BEESWARM_FAKE_MODE", "slow")
     scene.beeswarm.seed = 4
     wm, ws = FakeWM(), FakeWorkspace()
@@ -988,7 +1034,7 @@ def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch
     assert operators._active["job"] is None and wm.progress[-1] == "end"
     assert reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
     previous_swarm_intact("bltest", before)
-    assert cache.read_bytes() == cached
+    assert cache_state(cache.parent) == before_files  # the shot (seed 1) and the cache
 
 
 TWO_SWARMS = """
