@@ -9,6 +9,7 @@ completion synchronously.
 import atexit
 import os
 import pathlib
+import re
 import shutil
 import tempfile
 import time
@@ -16,7 +17,7 @@ import time
 import bpy
 from bpy.props import EnumProperty, StringProperty
 
-from . import binary, importer, motion, props, runner, shot_builder
+from . import binary, display, importer, motion, props, runner, shot_builder
 
 _active = {"job": None}  # one bake at a time
 
@@ -90,6 +91,34 @@ def _kill_running_bake():
 atexit.register(_kill_running_bake)
 
 
+_KEY = re.compile(r"\b(swarm|obstacle|target)\[(\d+)\]")
+
+
+def name_blender_objects(message, shot):
+    """The binary names shot keys (`obstacle[2].radius`); after each, the Blender object or
+    swarm it came from, so the artist knows what to fix: `obstacle[2] (Blender object
+    'post').radius`."""
+    if not shot:
+        return message
+    tables = {"swarm": shot.get("swarm", []), "obstacle": shot.get("obstacle", []),
+              "target": shot.get("target", [])}
+
+    def label(m):
+        kind, i = m.group(1), int(m.group(2))
+        items = tables[kind]
+        if i >= len(items) or not items[i].get("name"):
+            return m.group(0)
+        what = "swarm" if kind == "swarm" else "Blender object"
+        return f"{m.group(0)} ({what} '{items[i]['name']}')"
+    return _KEY.sub(label, message)
+
+
+def ensure_swarm(settings):
+    """A scene that never had a swarm bakes the default one (as the panel shows it)."""
+    if not len(settings.swarms):
+        props.add_swarm(settings)
+
+
 class Job:
     """Everything one bake needs, prepared before the subprocess starts."""
 
@@ -97,6 +126,11 @@ class Job:
         scene = context.scene
         self.settings = scene.beeswarm
         self.format = op.format
+        # Also baked besides the imported format (the panel's Formats; an operator call
+        # bakes only `format` unless it says otherwise).
+        self.formats = [self.format] + sorted(set(op.also_formats) - {self.format})
+        self.keep_scene_range = False
+        self.shot = None
         self.warnings = []
         bin_path, msg = binary.resolve(op.binary_path or props.preference_binary(context))
         if bin_path is None:
@@ -115,10 +149,13 @@ class Job:
                 self.info_error = str(e)
             self.bake_shot = shot
         else:
+            ensure_swarm(self.settings)
             try:
                 shot, self.warnings = shot_builder.build_shot(scene, self.settings)
             except shot_builder.ShotBuildError as e:
                 raise BakeError(str(e)) from None
+            self.shot = shot
+            self.keep_scene_range = not self.settings.use_scene_frames
             self.name = shot["scene"]["name"]
             self.fps = shot["scene"]["fps"]
             self.frames = tuple(shot["scene"]["frames"])
@@ -139,8 +176,8 @@ class Job:
         if self.shot_text is not None:
             self.bake_shot = self.staging / self.shot_path.name
             self.bake_shot.write_text(self.shot_text, encoding="utf-8")
-        fmt, _ = FORMAT_FILES[self.format]
-        self.argv = runner.bake_argv(self.binary, self.bake_shot, self.staging, [fmt, "csv"])
+        fmts = [FORMAT_FILES[f][0] for f in self.formats]
+        self.argv = runner.bake_argv(self.binary, self.bake_shot, self.staging, fmts + ["csv"])
         self.process = None
         self.started = None
 
@@ -191,15 +228,23 @@ class Job:
         def after(collection, objects):
             if self.settings.instance_motion:
                 motion.attach(context, name, self.format, objects, csv, frames, collection)
+            asset = self.settings.asset
+            if asset is not None and self.format == "USD":
+                if asset.name in collection.all_objects:
+                    raise BakeError(f"The insect asset '{asset.name}' is part of the swarm")
+                if not display.use_asset(objects, asset):
+                    raise BakeError(f"No instancer in {cache.name} to draw '{asset.name}' on")
+            display.apply(context.scene, objects)
 
         try:
             return importer.import_cache(context, name, str(cache), self.format, fps, frames,
-                                         after=after)
+                                         after=after, set_range=not self.keep_scene_range)
         except Exception as e:
             raise BakeError(f"Import of {cache.name} failed: {e}") from e
 
     def failure(self):
-        return runner.error_message(self.process.stderr, self.process.returncode)
+        return name_blender_objects(
+            runner.error_message(self.process.stderr, self.process.returncode), self.shot)
 
 
 class BEESWARM_OT_bake(bpy.types.Operator):
@@ -207,11 +252,16 @@ class BEESWARM_OT_bake(bpy.types.Operator):
 
     bl_idname = "beeswarm.bake"
     bl_label = "Bake Swarm"
-    bl_options = {"REGISTER"}
+    # UNDO: one undo step per bake; undoing it restores the previous import (a glTF swarm
+    # entirely; a USD swarm's objects, which read the cache file now on disk).
+    bl_options = {"REGISTER", "UNDO"}
 
     shot_path: StringProperty(name="Shot File", subtype="FILE_PATH", default="",
                               description="Shot to bake; empty = build the shot from the scene")
-    format: EnumProperty(name="Format", items=props.FORMATS, default="USD")
+    format: EnumProperty(name="Format", items=props.FORMATS, default="USD",
+                         description="The cache to bake and import")
+    also_formats: EnumProperty(name="Also Bake", items=props.FORMATS, options={"ENUM_FLAG"},
+                               default=set(), description="Caches baked besides `format`")
     binary_path: StringProperty(name="Binary", subtype="FILE_PATH", default="",
                                 description="beeswarm binary; empty = the add-on's preference")
 
@@ -312,6 +362,9 @@ class BEESWARM_OT_bake(bpy.types.Operator):
         except OSError as e:
             self._fail(context, f"Cannot write the shot: {e}")
             return None
+        if job.settings.asset is not None and job.format != "USD":
+            job.warnings.append(f"Insect Asset '{job.settings.asset.name}' is used with USD "
+                                f"only; the glTF bees keep their own meshes")
         for w in job.warnings:
             self.report({"WARNING"}, w)
         return job
@@ -379,6 +432,7 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
     filepath: StringProperty(subtype="FILE_PATH", default="")
 
     def execute(self, context):
+        ensure_swarm(context.scene.beeswarm)
         try:
             shot, warnings = shot_builder.build_shot(context.scene, context.scene.beeswarm)
         except shot_builder.ShotBuildError as e:

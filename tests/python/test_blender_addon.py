@@ -18,13 +18,13 @@ import pytest
 
 bpy = pytest.importorskip("bpy", reason="bpy (Blender as a module) is not installed")
 import numpy as np  # noqa: E402  (bpy brings numpy)
-from mathutils import Euler, Vector  # noqa: E402
+from mathutils import Euler, Quaternion, Vector  # noqa: E402
 
 from conftest import ROOT, read_tracks  # noqa: E402
 
 sys.path.insert(0, str(ROOT))
 import blender_addon  # noqa: E402
-from blender_addon import binary, importer, props, runner, shot_builder  # noqa: E402
+from blender_addon import binary, display, importer, props, runner, shot_builder  # noqa: E402
 
 TOL = 1e-4  # metres
 # Blender's name for this machine's platform (extension manifests' `platforms`).
@@ -54,10 +54,11 @@ def scene(tmp_path):
     s.obstacles = bpy.data.collections["Obstacles"]
     s.targets = bpy.data.collections["Targets"]
     s.shot_name = "bltest"
-    s.count = 40
     s.seed = 1
-    s.spawn_center = (0.0, 0.0, 1.0)
-    s.spawn_size = (0.8, 0.8, 0.8)
+    sw = props.add_swarm(s)
+    sw.count = 40
+    sw.spawn_center = (0.0, 0.0, 1.0)
+    sw.spawn_size = (0.8, 0.8, 0.8)
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
     return sc
 
@@ -188,7 +189,7 @@ def test_targets_and_spawn_from_scene(scene):
     spawn.location = (0.0, 0.0, 1.5)
     spawn.scale = (0.5, 1.0, 0.25)
     scene.collection.objects.link(spawn)
-    scene.beeswarm.spawn_object = spawn
+    scene.beeswarm.swarms[0].spawn_object = spawn
     scene.beeswarm.wind = (1.0, 2.0, 0.0)
     bpy.context.view_layer.update()
     shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
@@ -289,6 +290,237 @@ def test_binary_discovery(tmp_path, monkeypatch):
 
 
 # ---------------------------------------------------------------------------------------
+# The whole shot from the panel: several swarms, overrides, bounds, frames, formats
+
+def test_two_swarms_with_overrides_bounds_and_own_frames(scene, with_binary, tmp_path):
+    s = scene.beeswarm
+    first = s.swarms[0]
+    first.bee_length = 0.015
+    first.size_variation = 0.3
+    first.speed_variation = 0.05
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    first.overrides[0].param = "speed"
+    first.overrides[0].value = 1.5
+    box = add_empty("Roam", (0.0, 0.0, 1.0), collection="Obstacles")
+    bpy.data.collections["Obstacles"].objects.unlink(box)
+    scene.collection.objects.link(box)
+    box.empty_display_type = "CUBE"
+    box.scale = (3.0, 2.0, 1.5)
+    first.bounds_object = box
+    assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+    second = s.swarms[1]
+    assert second.name == "bees_2" and s.swarm_index == 1
+    second.count = 15
+    second.model = "boids"
+    second.spawn_center = (2.0, 0.0, 1.0)
+    s.use_scene_frames = False
+    s.frame_start, s.frame_end = 10, 30
+    bpy.context.view_layer.update()
+    shot, _ = shot_builder.build_shot(scene, s)
+    doc = tomllib.loads(shot_builder.shot_toml(shot))
+    a, b = doc["swarm"]
+    assert (a["name"], a["count"], b["name"], b["count"], b["model"]) == \
+        ("bees", 40, "bees_2", 15, "boids")
+    assert a["params"] == {"speed": 1.5} and "params" not in b
+    assert a["bee"] == pytest.approx({"length": 0.015, "radius": 0.0025})
+    assert a["variation"] == pytest.approx({"size": 0.3, "speed": 0.05})
+    assert a["bounds"] == {"center": pytest.approx([0.0, 1.0, 0.0]),
+                           "size": pytest.approx([6.0, 3.0, 4.0])}
+    assert "bounds" not in b
+    assert doc["scene"]["frames"] == [10, 30]
+    path = tmp_path / "two.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot, "test"))
+    r = subprocess.run([with_binary, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+    assert run_bake(with_binary, "USD") == {"FINISHED"}
+    clouds = sorted(o.name for o in bpy.data.collections["bltest"].all_objects
+                    if o.type == "POINTCLOUD")
+    assert clouds == ["bees", "bees_2"]
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "bltest" / "bltest.tracks.csv")
+    assert len(tracks) == 55 and sorted(next(iter(tracks.values()))) == list(range(10, 31))
+    # The panel's own range is baked; the scene keeps its range.
+    assert (scene.frame_start, scene.frame_end) == (1, 36)
+
+
+def test_both_formats_in_one_bake(scene, with_binary, tmp_path):
+    s = scene.beeswarm
+    s.formats = {"USD", "GLTF"}
+    s.format = "GLTF"
+    log = draw_panel(bpy.context)
+    assert ("prop", "format") in log  # which one to import, once both are chosen
+    assert run_bake(with_binary, "GLTF", also_formats={"USD"}) == {"FINISHED"}
+    folder = tmp_path / "beeswarm_cache" / "bltest"
+    assert {"bltest.glb", "bltest.usda", "bltest.tracks.csv"} <= {p.name for p in folder.iterdir()}
+    assert len(gltf_bodies("bltest")) == 40  # the glTF is the one imported
+
+
+def test_unsupported_obstacle_shapes_are_errors_naming_the_objects(scene, beeswarm_bin):
+    egg = add_primitive("uv_sphere", "Obstacles", radius=0.2, location=(1.0, 0.0, 1.0))
+    egg.name = "egg"
+    egg.scale = (1.0, 1.0, 1.6)
+    oval = add_primitive("cylinder", "Obstacles", radius=0.1, depth=1.0, location=(-1.0, 0.0, 0.5))
+    oval.name = "oval_post"
+    oval.scale = (1.0, 2.0, 1.0)
+    parent = bpy.data.objects.new("squash", None)
+    parent.scale = (1.0, 3.0, 1.0)
+    scene.collection.objects.link(parent)
+    leaning = add_primitive("cube", "Obstacles", size=0.2, location=(0.0, 1.0, 0.2),
+                            rotation=(0.0, 0.0, math.radians(30)))
+    leaning.name = "leaning_box"
+    leaning.parent = parent
+    me = bpy.data.meshes.new("rock")
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (0, 2, 0), (0, 0, 0.3), (0.5, 0.5, 0.1)], [], [])
+    bpy.data.collections["Obstacles"].objects.link(bpy.data.objects.new("rock", me))
+    add_primitive("cube", "Obstacles", size=0.2, location=(0.0, -1.0, 0.2))  # fine
+    bpy.context.view_layer.update()
+    with pytest.raises(shot_builder.ShotBuildError) as err:
+        shot_builder.build_shot(scene, scene.beeswarm)
+    msg = str(err.value)
+    for name, why in (("egg", "ellipsoid"), ("oval_post", "elliptic cylinder"),
+                      ("leaning_box", "sheared"), ("rock", "not a sphere, box")):
+        assert f"'{name}'" in msg and why in msg, (name, msg)
+    assert "'Cube'" not in msg
+    with pytest.raises(RuntimeError, match="egg"):
+        bake("USD", beeswarm_bin)
+    assert not shot_collections("bltest")
+
+
+def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
+    """A flat sphere passes the add-on but not the binary: its message names the Blender
+    object beside the shot key."""
+    ball = add_primitive("uv_sphere", "Obstacles", radius=0.2, location=(1.0, 0.0, 1.0))
+    ball.name = "ball"
+    ball.scale = (0.0, 0.0, 0.0)
+    shot_cylinder_scene(scene)
+    bpy.context.view_layer.update()
+    with pytest.raises(RuntimeError) as err:
+        bake("USD", beeswarm_bin)
+    msg = str(err.value)
+    index = [o["name"] for o in shot_builder.build_shot(scene, scene.beeswarm)[0]["obstacle"]]
+    assert f"obstacle[{index.index('ball')}] (Blender object 'ball').radius" in msg, msg
+    from blender_addon import operators
+    shot = {"swarm": [{"name": "bees"}], "obstacle": [{"name": "post"}]}
+    assert operators.name_blender_objects("key `swarm[0].params.speed`, `obstacle[0].a`, "
+                                          "`obstacle[3].b`", shot) == \
+        "key `swarm[0] (swarm 'bees').params.speed`, `obstacle[0] (Blender object 'post').a`, " \
+        "`obstacle[3].b`"
+
+
+def test_wing_flap_and_its_limit(scene):
+    s = scene.beeswarm
+    s.wing_flap_hz = 6.0
+    shot, _ = shot_builder.build_shot(scene, s)
+    assert tomllib.loads(shot_builder.shot_toml(shot))["output"] == {"wing_flap_hz": 6.0}
+    s.wing_flap_hz = 13.0  # 24 fps: above 12 Hz it would alias
+    with pytest.raises(shot_builder.ShotBuildError, match="above half the frame rate"):
+        shot_builder.build_shot(scene, s)
+
+
+def test_motion_blur_hint_from_the_swarms_speed(scene, with_binary):
+    from blender_addon import panel
+    sw = scene.beeswarm.swarms[0]
+    scene.render.motion_blur_shutter = 0.5
+    doc, _ = props.models_doc(bpy.context)
+    hint = panel.motion_blur_hint(scene, sw, doc)
+    # nest preset: 1 m/s; 0.5 frame at 24 fps: 2.1 cm, 1.7 lengths of a 12 mm bee
+    assert "at 1 m/s a bee smears 2.1 cm, 1.7 body lengths" in hint, hint
+    assert "0.1 gives 0.4 cm" in hint
+    sw.overrides.add().param = "speed"
+    sw.overrides[0].value = 2.0
+    assert "at 2 m/s a bee smears 4.2 cm" in panel.motion_blur_hint(scene, sw, doc)
+    text = " ".join(t for kind, t in draw_panel(bpy.context) if kind == "label")
+    assert "Motion blur" in text and "Shutter" in text
+
+
+def test_undo_restores_the_swarm_before_a_bake(scene, beeswarm_bin):
+    """The bake is one undo step (as a button press makes it; a script asks with undo=True).
+    glTF keeps its animation in the .blend, so undo brings the previous swarm back whole."""
+    shot_cylinder_scene(scene)
+    bpy.ops.ed.undo_push(message="before the first bake")
+
+    def bake_with_undo():
+        return bpy.ops.beeswarm.bake("EXEC_DEFAULT", True, format="GLTF", binary_path=beeswarm_bin)
+    assert bake_with_undo() == {"FINISHED"}
+    first = gltf_positions("bltest", 20)
+    scene.beeswarm.seed = 7
+    assert bake_with_undo() == {"FINISHED"}
+    second = gltf_positions("bltest", 20)
+    assert max((first[b] - second[b]).length for b in first) > 1e-3
+    assert bpy.ops.ed.undo() == {"FINISHED"}  # the second bake
+    assert len(shot_collections("bltest")) == 1
+    back = gltf_positions("bltest", 20)
+    assert max((first[b] - back[b]).length for b in first) < 1e-6
+    assert bpy.context.scene.beeswarm.seed == 1
+    assert bpy.ops.ed.undo() == {"FINISHED"}  # the first bake
+    assert not shot_collections("bltest")
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert len(shot_collections("bltest")) == 1
+
+
+def drawn_instances(ob, frame=None):
+    """{persistent id: DepsgraphObjectInstance matrix, object name} of the prototype roots
+    the viewport depsgraph draws for an instancer."""
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    return {i.persistent_id[1]: (i.matrix_world.copy(), i.object.original.name)
+            for i in dg.object_instances
+            if i.is_instance and i.parent and i.parent.original == ob
+            and i.object.original.parent is None}
+
+
+def test_display_percentage_in_the_viewport_only(scene, beeswarm_bin):
+    s = scene.beeswarm
+    s.swarms[0].count = 200
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    inst = usd_instancer("bltest")
+    assert len(drawn_instances(inst, 5)) == 200
+    s.display_percent = 25
+    drawn = drawn_instances(inst, 5)
+    assert 25 <= len(drawn) <= 75, len(drawn)  # a random quarter of 200
+    assert drawn.keys() == drawn_instances(inst, 20).keys()  # the same bees all along
+    mod = inst.modifiers[display.DISPLAY_MODIFIER]
+    assert mod.show_viewport and not mod.show_render  # renders draw every bee
+    s.display_percent = 100
+    assert len(drawn_instances(inst, 5)) == 200
+
+    s.display_percent = 30
+    scene.beeswarm.seed = 3
+    assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}  # a new import takes the setting
+    bodies = gltf_bodies("bltest")
+    hidden = {b for b, o in bodies.items() if o.hide_viewport}
+    assert hidden == {b for b in bodies if not display.shown(b, 30)}
+    assert 0 < len(hidden) < len(bodies) and not any(o.hide_render for o in bodies.values())
+
+
+def test_a_scene_object_as_the_insect_asset(scene, beeswarm_bin, tmp_path):
+    """The asset (modelled facing +X, +Z up) is drawn on every bee, turned into the bee's
+    body frame: its +X along the body's forward axis, its +Z along the body's up."""
+    bpy.ops.mesh.primitive_cone_add(radius1=0.003, depth=0.012, location=(5.0, 5.0, 5.0))
+    wasp = bpy.context.active_object
+    wasp.name = "wasp"
+    scene.beeswarm.asset = wasp
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    inst = usd_instancer("bltest")
+    drawn = drawn_instances(inst, 12)
+    assert len(drawn) == 40 and {name for _, name in drawn.values()} == {"wasp"}
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "bltest" / "bltest.tracks.csv")
+    for bee, (m, _) in drawn.items():
+        row = tracks[bee][12]
+        q = Quaternion((row["qw"], row["qx"], row["qy"], row["qz"]))  # body → world, shot axes
+        assert (m.translation - blender_from_shot([row["x"], row["y"], row["z"]])).length < TOL
+        rot = m.to_3x3().normalized()
+        forward = blender_from_shot(q @ Vector((1, 0, 0)))
+        up = blender_from_shot(q @ Vector((0, 1, 0)))
+        assert (rot @ Vector((1, 0, 0)) - forward).length < 1e-3, bee
+        assert (rot @ Vector((0, 0, 1)) - up).length < 1e-3, bee
+    # glTF keeps its own bees, and says so.
+    r = bake("GLTF", beeswarm_bin)
+    assert r == {"FINISHED"} and gltf_bodies("bltest")
+
+
+# ---------------------------------------------------------------------------------------
 # Model and preset menus, from `beeswarm models --json`
 
 @pytest.fixture
@@ -304,7 +536,7 @@ def names(items):
 
 
 def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
-    s = scene.beeswarm
+    s = scene.beeswarm.swarms[0]
     assert names(props.model_items(s, bpy.context)) == ["bee", "curl", "brownian", "boids"]
     expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
                                          text=True, check=True).stdout)
@@ -324,10 +556,10 @@ def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
 
 def test_a_curl_swarm_built_from_the_scene_passes_check_and_bakes(scene, with_binary, tmp_path):
     shot_cylinder_scene(scene)
-    s = scene.beeswarm
+    s = scene.beeswarm.swarms[0]
     s.model = "curl"
     assert s.preset == "default"
-    shot, _ = shot_builder.build_shot(scene, s)
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
     assert (shot["swarm"][0]["model"], shot["swarm"][0]["preset"]) == ("curl", "default")
     path = tmp_path / "curl.shot.toml"
     path.write_text(shot_builder.shot_toml(shot, "test"))
@@ -341,7 +573,7 @@ def test_a_curl_swarm_built_from_the_scene_passes_check_and_bakes(scene, with_bi
 def test_model_menu_falls_back_to_the_bee_model_and_says_why(scene, tmp_path, monkeypatch):
     monkeypatch.setattr(binary, "_models_cache", {})
     doc, reason = binary.models(str(tmp_path / "missing" / "beeswarm"))
-    assert names(props.model_items(scene.beeswarm, bpy.context)) and doc is binary.FALLBACK_MODELS
+    assert names(props.model_items(scene.beeswarm.swarms[0], bpy.context)) and doc is binary.FALLBACK_MODELS
     assert "No beeswarm binary" in reason
     # A binary without the `models` subcommand (an older build): the bee model, and why.
     old = tmp_path / "old" / binary.EXE
@@ -382,7 +614,7 @@ def test_missing_binary_reports_and_imports_nothing(scene, tmp_path):
 
 def test_count_zero_is_an_error(scene, beeswarm_bin):
     shot_cylinder_scene(scene)
-    scene.beeswarm.count = 0
+    scene.beeswarm.swarms[0].count = 0
     with pytest.raises(RuntimeError, match="at least 1 bee"):
         bake("USD", beeswarm_bin)
     assert not shot_collections("bltest")
@@ -633,6 +865,10 @@ class RecordingLayout:
         assert prop in data.bl_rna.properties, prop
         self.log.append(("prop", prop))
 
+    def template_list(self, list_type, list_id, data, prop, active_data, active_prop, **kw):
+        assert prop in data.bl_rna.properties and active_prop in active_data.bl_rna.properties
+        self.log.append(("list", list_type))
+
     def operator(self, idname, **kw):
         self.log.append(("operator", idname))
 
@@ -655,7 +891,7 @@ def test_panel_draws_settings_and_says_when_no_binary(scene, monkeypatch, beeswa
     text = " ".join(t for kind, t in log if kind == "label")
     assert "No beeswarm binary found" in text
     props_shown = {t for kind, t in log if kind == "prop"}
-    assert {"count", "preset", "seed", "obstacles", "targets", "format"} <= props_shown
+    assert {"count", "preset", "seed", "obstacles", "targets", "formats"} <= props_shown
     assert ("operator", "beeswarm.bake") in log
     monkeypatch.setattr(binary, "discover", lambda *a, **k: pathlib.Path(beeswarm_bin))
     scene.beeswarm.source = "FILE"
@@ -718,7 +954,8 @@ print("BINARY:", binary.resolve("")[0])
 sc = bpy.context.scene
 sc.frame_start, sc.frame_end = 1, 12
 sc.beeswarm.shot_name = "installed"
-sc.beeswarm.count = 20
+assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+sc.beeswarm.swarms[0].count = 20
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(workdir, "scene.blend"))
 assert bpy.ops.beeswarm.bake(format="USD") == {"FINISHED"}
 sc.frame_set(6)
@@ -839,7 +1076,7 @@ class ProbeEngine(bpy.types.RenderEngine):
 
 
 def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
-    scene.beeswarm.count = 12
+    scene.beeswarm.swarms[0].count = 12
     assert bake("USD", fake_bin) == {"FINISHED"}
     tracks = read_tracks(pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.tracks.csv")))
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
@@ -897,13 +1134,13 @@ def test_failed_bake_leaves_the_shot_and_the_cache_as_they_were(scene, fake_bin,
     folder = tmp_path / "beeswarm_cache" / "bltest"
     before = cache_state(folder)
     assert "count = 40" in (folder / "bltest.shot.toml").read_text()
-    scene.beeswarm.count = 20000
+    scene.beeswarm.swarms[0].count = 20000
     monkeypatch.setenv("BEESWARM_FAKE_MODE", mode)
     with pytest.raises(RuntimeError, match="Bake failed"):
         bake("USD", fake_bin)
     assert cache_state(folder) == before
     monkeypatch.setenv("BEESWARM_FAKE_MODE", "ok")
-    scene.beeswarm.count = 12
+    scene.beeswarm.swarms[0].count = 12
     assert bake("USD", fake_bin) == {"FINISHED"}
     assert "count = 12" in (folder / "bltest.shot.toml").read_text()
     assert len(read_tracks(folder / "bltest.tracks.csv")) == 12
@@ -917,7 +1154,7 @@ def test_unsaved_file_bakes_into_blenders_temp_directory(fake_bin, tmp_path):
     sc = bpy.context.scene
     sc.frame_start, sc.frame_end = 1, 12
     sc.beeswarm.shot_name = "unsaved"
-    sc.beeswarm.count = 5
+    props.add_swarm(sc.beeswarm).count = 5
     assert bake("USD", fake_bin) == {"FINISHED"}
     folder = pathlib.Path(bpy.app.tempdir) / "beeswarm_unsaved" / "beeswarm_cache" / "unsaved"
     assert sorted(p.name for p in folder.iterdir()) == [
@@ -976,7 +1213,8 @@ def modal_operator(job):
 
 def start_modal(context, binary_path, fmt="USD", shot_path=""):
     from blender_addon import operators
-    props = type("Props", (), {"format": fmt, "binary_path": binary_path, "shot_path": shot_path})()
+    props = type("Props", (), {"format": fmt, "binary_path": binary_path, "shot_path": shot_path,
+                               "also_formats": set()})()
     job = operators.Job(context, props)
     job.start()
     operators._active["job"] = job
