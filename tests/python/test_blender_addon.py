@@ -1134,7 +1134,7 @@ def test_failed_bake_leaves_the_shot_and_the_cache_as_they_were(scene, fake_bin,
     folder = tmp_path / "beeswarm_cache" / "bltest"
     before = cache_state(folder)
     assert "count = 40" in (folder / "bltest.shot.toml").read_text()
-    scene.beeswarm.swarms[0].count = 20000
+    scene.beeswarm.swarms[0].count = 900
     monkeypatch.setenv("BEESWARM_FAKE_MODE", mode)
     with pytest.raises(RuntimeError, match="Bake failed"):
         bake("USD", fake_bin)
