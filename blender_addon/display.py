@@ -1,6 +1,6 @@
 """What the viewport shows of an imported swarm: a share of the bees (Display %, viewport
-only, renders draw every bee) and, for USD, a scene object drawn on every bee instead of the
-cache's prototype (Insect Asset)."""
+only, renders draw every bee), for USD each bee as a point (Points in Viewport), and for
+USD a scene object drawn on every bee instead of the cache's prototype (Insect Asset)."""
 import math
 import re
 
@@ -31,17 +31,35 @@ def _display_group():
     gin, gout = ng.nodes.new("NodeGroupInput"), ng.nodes.new("NodeGroupOutput")
     rnd = ng.nodes.new("FunctionNodeRandomValue")
     rnd.data_type = "BOOLEAN"
-    delete = ng.nodes.new("GeometryNodeDeleteGeometry")
-    delete.domain = "INSTANCE"
     invert = ng.nodes.new("FunctionNodeBooleanMath")
     invert.operation = "NOT"
     ng.links.new(gin.outputs["Share"], rnd.inputs["Probability"])
     # The boolean output: one of four sockets up to 5.0, the only one (typed) in 5.3.
     ng.links.new(next(o for o in rnd.outputs if o.type == "BOOLEAN"), invert.inputs[0])
-    ng.links.new(gin.outputs["Geometry"], delete.inputs["Geometry"])
-    ng.links.new(invert.outputs[0], delete.inputs["Selection"])
-    ng.links.new(delete.outputs["Geometry"], gout.inputs["Geometry"])
+    # Instances, or points when the instancing is off in the viewport (Points in Viewport),
+    # each from its own component: a point-domain delete on instances would reach into the
+    # instanced prototypes.
+    parts = ng.nodes.new("GeometryNodeSeparateComponents")
+    join = ng.nodes.new("GeometryNodeJoinGeometry")
+    ng.links.new(gin.outputs["Geometry"], parts.inputs[0])
+    for component, domain in (("Instances", "INSTANCE"), ("Point Cloud", "POINT")):
+        delete = ng.nodes.new("GeometryNodeDeleteGeometry")
+        delete.domain = domain
+        ng.links.new(parts.outputs[component], delete.inputs["Geometry"])
+        ng.links.new(invert.outputs[0], delete.inputs["Selection"])
+        ng.links.new(delete.outputs["Geometry"], join.inputs[0])
+    ng.links.new(join.outputs[0], gout.inputs["Geometry"])
     return ng
+
+
+def _instancing_modifier(ob):
+    """The USD importer's own Geometry Nodes modifier (Instance on Points), or None."""
+    for mod in ob.modifiers:
+        ng = getattr(mod, "node_group", None)
+        if mod.type == "NODES" and ng is not None and any(
+                n.bl_idname == "GeometryNodeInstanceOnPoints" for n in ng.nodes):
+            return mod
+    return None
 
 
 def _share_input(ng):
@@ -50,9 +68,11 @@ def _share_input(ng):
 
 
 def apply(scene, objects=None):
-    """Applies the scene's Display % to its imported swarms (or to `objects`)."""
+    """Applies the scene's Display % and Points in Viewport to its imported swarms (or to
+    `objects`)."""
     from . import motion
     percent = scene.beeswarm.display_percent
+    points = scene.beeswarm.viewport_points
     if objects is None:
         objects = [o for o in scene.objects if o.get(importer.SHOT_TAG) is not None]
     for ob in objects:
@@ -63,6 +83,9 @@ def apply(scene, objects=None):
                 mod.node_group = _display_group()
                 mod.show_render = False  # renders draw every bee
             motion.set_modifier_input(mod, _share_input(mod.node_group), percent / 100.0)
+            instancing = _instancing_modifier(ob)
+            if instancing is not None and instancing.show_viewport == points:
+                instancing.show_viewport = not points  # renders keep instancing
             ob.update_tag()
             continue
         m = _BEE_OBJECT.match(ob.name)

@@ -42,6 +42,7 @@ class BEESWARM_PT_panel(bpy.types.Panel):
         if imported == "USD":
             col.prop(s, "instance_motion")
             col.prop(s, "asset")
+            col.prop(s, "viewport_points")
         col.prop(s, "display_percent", slider=True)
         row = layout.row()
         row.scale_y = 1.4

@@ -201,6 +201,10 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
         name="Display", default=100, min=1, max=100, subtype="PERCENTAGE",
         update=_display_changed,
         description="Share of the bees drawn in the viewport (renders draw every bee)")
+    viewport_points: BoolProperty(
+        name="Points in Viewport", default=False, update=_display_changed,
+        description="USD: draw each bee as a point in the viewport (light for big swarms); "
+                    "renders draw the bees")
     asset: PointerProperty(
         name="Insect Asset", type=bpy.types.Object,
         description="USD: draw this object on every bee instead of the cache's bee (model it "

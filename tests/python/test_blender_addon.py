@@ -484,6 +484,17 @@ def test_display_percentage_in_the_viewport_only(scene, beeswarm_bin):
     assert mod.show_viewport and not mod.show_render  # renders draw every bee
     s.display_percent = 100
     assert len(drawn_instances(inst, 5)) == 200
+    # Points in Viewport: no instances drawn, a point per bee; renders keep the bees.
+    s.viewport_points = True
+    assert not drawn_instances(inst, 5)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(inst.evaluated_get(dg).data.points) == 200
+    s.display_percent = 50
+    assert 60 <= len(inst.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.points) <= 140
+    assert all(m.show_render for m in inst.modifiers if m.name != display.DISPLAY_MODIFIER)
+    s.viewport_points = False
+    s.display_percent = 100
+    assert len(drawn_instances(inst, 5)) == 200
 
     s.display_percent = 30
     scene.beeswarm.seed = 3
