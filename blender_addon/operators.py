@@ -242,9 +242,28 @@ class Job:
         except Exception as e:
             raise BakeError(f"Import of {cache.name} failed: {e}") from e
 
+    def keep_failed_shot(self):
+        """A failing bake's shot (built from the scene) is worth reading, but not beside the
+        cache it did not make: it moves to Blender's session temp folder and the message
+        points there."""
+        if self.shot_text is None or not self.bake_shot.is_file():
+            return None
+        kept = pathlib.Path(bpy.app.tempdir or tempfile.gettempdir()) / "beeswarm_failed"
+        kept.mkdir(parents=True, exist_ok=True)
+        kept = kept / self.bake_shot.name
+        shutil.copyfile(self.bake_shot, kept)
+        return kept
+
     def failure(self):
-        return name_blender_objects(
+        text = name_blender_objects(
             runner.error_message(self.process.stderr, self.process.returncode), self.shot)
+        kept = self.keep_failed_shot()
+        if kept is not None:
+            text = text.replace(str(self.bake_shot), str(kept))
+        if self.shot is not None and f"{self.name}.shot.toml:" in text:
+            # The quoted lines are the shot file's, in its Y-up axes.
+            text += "\n(The shot file is Y-up: its [x, y, z] is Blender's (x, −z, y).)"
+        return text
 
 
 class BEESWARM_OT_bake(bpy.types.Operator):
@@ -380,8 +399,9 @@ class BEESWARM_OT_bake(bpy.types.Operator):
     def _complete(self, context, job):
         rc = job.process.returncode
         if rc != 0:
+            message = job.failure()
             job.discard()
-            self._fail(context, f"Bake failed: {job.failure()}")
+            self._fail(context, f"Bake failed: {message}")
             return {"CANCELLED"}
         try:
             job.commit()

@@ -399,6 +399,12 @@ def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
     msg = str(err.value)
     index = [o["name"] for o in shot_builder.build_shot(scene, scene.beeswarm)[0]["obstacle"]]
     assert f"obstacle[{index.index('ball')}] (Blender object 'ball').radius" in msg, msg
+    assert "bltest.shot.toml:" in msg and "Y-up: its [x, y, z] is Blender's (x, −z, y)" in msg
+    # The failing shot is kept where the message says (Blender's temp folder), not beside
+    # the cache it did not make.
+    kept = pathlib.Path(bpy.app.tempdir) / "beeswarm_failed" / "bltest.shot.toml"
+    assert f"{kept}:" in msg and 'name = "ball"' in kept.read_text()
+    assert not (pathlib.Path(bpy.path.abspath("//beeswarm_cache")) / "bltest").exists()
     from blender_addon import operators
     shot = {"swarm": [{"name": "bees"}], "obstacle": [{"name": "post"}]}
     assert operators.name_blender_objects("key `swarm[0].params.speed`, `obstacle[0].a`, "
