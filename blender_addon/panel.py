@@ -139,9 +139,7 @@ def motion_blur_hint(scene, swarm, doc):
     or "" without a swarm. Blur length = speed × shutter / fps (shutter in frames)."""
     if swarm is None:
         return ""
-    info = binary.model_info(doc, swarm.model) or {}
-    preset = next((p for p in info.get("presets", []) if p["name"] == swarm.preset), {})
-    speed = preset.get("values", {}).get("speed")
+    speed = props.preset_values(doc, swarm).get("speed")
     speed = next((o.value for o in swarm.overrides if o.param == "speed"), speed)
     if speed is None:
         speed = 1.0  # the bee model's default

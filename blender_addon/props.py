@@ -37,6 +37,14 @@ def preset_items(self, context):
     return items
 
 
+def preset_values(doc, swarm):
+    """{parameter: value} of the swarm's chosen built-in preset ({} for a preset file or a
+    binary that does not list values)."""
+    info = binary.model_info(doc, swarm.model) or {}
+    preset = next((p for p in info.get("presets", []) if p["name"] == swarm.preset), {})
+    return preset.get("values", {})
+
+
 def _owner_swarm(item):
     """The swarm an override item belongs to (from its RNA path, `beeswarm.swarms[i]...`)."""
     path = item.path_from_id()

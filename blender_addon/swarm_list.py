@@ -40,16 +40,24 @@ class BEESWARM_OT_swarm_remove(bpy.types.Operator):
         return len(context.scene.beeswarm.swarms) > 0
 
     def execute(self, context):
-        s = context.scene.beeswarm
-        s.swarms.remove(s.swarm_index)
-        s.swarm_index = max(0, min(s.swarm_index, len(s.swarms) - 1))
+        remove_active(context.scene.beeswarm, "swarms", "swarm_index")
         return {"FINISHED"}
+
+
+def _clamped(owner, items, index):
+    return max(0, min(getattr(owner, index), len(getattr(owner, items)) - 1))
+
+
+def remove_active(owner, items, index):
+    """Removes the list's selected item; the selection stays on a neighbour."""
+    getattr(owner, items).remove(_clamped(owner, items, index))
+    setattr(owner, index, _clamped(owner, items, index))
 
 
 def active_swarm(settings):
     if not len(settings.swarms):
         return None
-    return settings.swarms[max(0, min(settings.swarm_index, len(settings.swarms) - 1))]
+    return settings.swarms[_clamped(settings, "swarms", "swarm_index")]
 
 
 class BEESWARM_OT_override_add(bpy.types.Operator):
@@ -72,8 +80,7 @@ class BEESWARM_OT_override_add(bpy.types.Operator):
         free = [q for q in info.get("params", []) if q["name"] not in taken]
         if free:
             o.param = free[0]["name"]
-            preset = next((p for p in info.get("presets", []) if p["name"] == sw.preset), {})
-            o.value = preset.get("values", {}).get(free[0]["name"], free[0]["default"])
+            o.value = props.preset_values(doc, sw).get(free[0]["name"], free[0]["default"])
         sw.override_index = len(sw.overrides) - 1
         return {"FINISHED"}
 
@@ -90,9 +97,7 @@ class BEESWARM_OT_override_remove(bpy.types.Operator):
         return sw is not None and len(sw.overrides) > 0
 
     def execute(self, context):
-        sw = active_swarm(context.scene.beeswarm)
-        sw.overrides.remove(sw.override_index)
-        sw.override_index = max(0, min(sw.override_index, len(sw.overrides) - 1))
+        remove_active(active_swarm(context.scene.beeswarm), "overrides", "override_index")
         return {"FINISHED"}
 
 

@@ -343,6 +343,30 @@ def test_two_swarms_with_overrides_bounds_and_own_frames(scene, with_binary, tmp
     assert (scene.frame_start, scene.frame_end) == (1, 36)
 
 
+def test_swarm_and_override_lists_add_and_remove(scene, with_binary):
+    s = scene.beeswarm
+    for _ in range(2):
+        assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+    assert [w.name for w in s.swarms] == ["bees", "bees_2", "bees_3"] and s.swarm_index == 2
+    s.swarm_index = 1
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    first, second = s.swarms[1].overrides
+    # Each starts at another parameter, at the preset's value.
+    assert first.param == "kappa1" and second.param == "kappa2"
+    assert (first.value, second.value) == pytest.approx((1.0, 2.5))  # nest
+    s.swarms[1].override_index = 0
+    assert bpy.ops.beeswarm.override_remove() == {"FINISHED"}
+    assert [o.param for o in s.swarms[1].overrides] == ["kappa2"]
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert [w.name for w in s.swarms] == ["bees", "bees_3"] and s.swarm_index == 1
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert not s.swarms and not bpy.ops.beeswarm.swarm_remove.poll()
+    with pytest.raises(shot_builder.ShotBuildError, match="no swarm"):
+        shot_builder.build_shot(scene, s)
+
+
 def test_both_formats_in_one_bake(scene, with_binary, tmp_path):
     s = scene.beeswarm
     s.formats = {"USD", "GLTF"}
