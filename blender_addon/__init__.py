@@ -5,9 +5,9 @@ tab; the operator `beeswarm.bake` does the work and can be scripted:
 
     bpy.ops.beeswarm.bake(shot_path="", format='USD', binary_path="")
 """
-from . import motion, operators, panel, props
+from . import motion, operators, panel, props, swarm_list
 
-_modules = (props, operators, panel, motion)
+_modules = (props, swarm_list, operators, panel, motion)
 
 
 def register():

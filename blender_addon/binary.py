@@ -1,6 +1,13 @@
-"""Finding the `beeswarm` binary: the add-on's preference when set, else PATH, else a
-`target/release/beeswarm` (or `target/debug/`) in the repository the add-on sits in,
-searched upwards from the add-on's folder."""
+"""Finding the `beeswarm` binary, in this order:
+
+1. a path given explicitly: the operator's `binary_path`, else the add-on's preference
+   (empty by default; set, it is a deliberate choice and wins, and a wrong one is an error);
+2. the binary bundled in the extension, `bin/beeswarm` beside this file
+   (scripts/build-extension puts it there), so a fresh install works without PATH;
+3. `beeswarm` on PATH;
+4. `target/release/beeswarm` (or `target/debug/`) of the repository the add-on folder sits
+   in, searched upwards (a development link to blender_addon/).
+"""
 import json
 import os
 import pathlib
@@ -16,6 +23,21 @@ def _executable(p):
     return p is not None and p.is_file() and os.access(p, os.X_OK)
 
 
+def bundled(addon_dir=None):
+    """The binary packed into the extension (`bin/beeswarm` in the add-on's folder), or None.
+    Blender's installer extracts the zip without file modes, so the first call makes it
+    executable again."""
+    p = pathlib.Path(addon_dir or pathlib.Path(__file__).parent) / "bin" / EXE
+    if not p.is_file():
+        return None
+    if not os.access(p, os.X_OK):
+        try:
+            p.chmod(p.stat().st_mode | 0o755)
+        except OSError:
+            return None
+    return p if _executable(p) else None
+
+
 def search_upwards(start, max_levels=8):
     """`target/release/beeswarm` in `start` or one of its parents (release before debug)."""
     here = pathlib.Path(start).resolve()
@@ -28,14 +50,16 @@ def search_upwards(start, max_levels=8):
 
 
 def discover(start=None, use_cache=True):
-    """The binary found without a preference, or None. Cached for two seconds (the panel
-    draws often)."""
+    """The binary found without a preference (bundled, PATH, repository), or None. Cached
+    for two seconds (the panel draws often)."""
     start = start or pathlib.Path(__file__).parent
     now = time.monotonic()
     if use_cache and _cache["start"] == str(start) and now - _cache["at"] < 2.0:
         return _cache["value"]
-    found = shutil.which("beeswarm")
-    found = pathlib.Path(found) if found else search_upwards(start)
+    found = bundled(start)
+    if found is None:
+        on_path = shutil.which("beeswarm")
+        found = pathlib.Path(on_path) if on_path else search_upwards(start)
     _cache.update(at=now, value=found, start=str(start))
     return found
 
@@ -54,8 +78,9 @@ def resolve(explicit=""):
     found = discover()
     if found:
         return found, f"beeswarm: {found}"
-    return None, ("No beeswarm binary found: put it on PATH, build it with "
-                  "`cargo build --release`, or set its path in the add-on's preferences")
+    return None, ("No beeswarm binary found: install the extension zip that "
+                  "scripts/build-extension makes (the binary is inside), put beeswarm on "
+                  "PATH, or set its path in the add-on's preferences")
 
 
 # The models a binary too old to list them (no `models` subcommand) or a missing binary

@@ -38,7 +38,7 @@ def shot_info(shot_path):
     return name, fps, frames
 
 
-def set_scene_timing(scene, fps, frames):
+def set_scene_timing(scene, fps, frames, set_range=True):
     """Sets the scene's frame rate (fps / fps_base for a non-integer rate) and range."""
     whole = round(fps)
     if abs(whole - fps) < 1e-6:
@@ -47,6 +47,8 @@ def set_scene_timing(scene, fps, frames):
         base = 1001.0 / 1000.0 if abs(fps * 1.001 - round(fps * 1.001)) < 1e-3 else 1.0
         scene.render.fps = int(round(fps * base))
         scene.render.fps_base = scene.render.fps / fps
+    if not set_range:
+        return
     scene.frame_start, scene.frame_end = int(frames[0]), int(frames[1])
     if not frames[0] <= scene.frame_current <= frames[1]:
         scene.frame_current = int(frames[0])
@@ -151,7 +153,7 @@ def align_gltf_time(actions, fps, frame_start):
 
 
 def _supported(op, **kwargs):
-    """Only the options this Blender's importer has (4.2 lacks some of 5.0's)."""
+    """Only the options this Blender's importer has (older ones lack some of 5.0's)."""
     props = op.get_rna_type().properties
     return {k: v for k, v in kwargs.items() if k in props}
 
@@ -209,13 +211,14 @@ def _adopt_stray_collections(staging, new_ids, view_layer):
                 staging.objects.link(obj)
 
 
-def import_cache(context, shot_name, path, fmt, fps, frames, after=None):
+def import_cache(context, shot_name, path, fmt, fps, frames, after=None, set_range=True):
     """Imports `path` into a new collection `shot_name` under the scene's collection.
 
     The scene's fps and range are set first (glTF animation is converted with them). On
     success the previous import of the shot is removed; on failure everything this import
     created is removed, the previous import and the scene's timing are restored, and the
-    error is raised. `after(collection, objects)` runs inside the guarded section."""
+    error is raised. `after(collection, objects)` runs inside the guarded section.
+    `set_range=False` leaves the scene's frame range alone (a bake of another range)."""
     scene = context.scene
     saved = (scene.render.fps, scene.render.fps_base, scene.frame_start, scene.frame_end,
              scene.frame_current)
@@ -226,7 +229,7 @@ def import_cache(context, shot_name, path, fmt, fps, frames, after=None):
     before = _snapshot()
     staging = None
     try:
-        set_scene_timing(scene, fps, frames)
+        set_scene_timing(scene, fps, frames, set_range)
         staging = bpy.data.collections.new(shot_name)
         scene.collection.children.link(staging)
         layer = _find_layer_collection(view_layer.layer_collection, staging)

@@ -220,6 +220,16 @@ def _point_positions(ob, scene, frame):
     return pos.reshape(-1, 3)
 
 
+def set_modifier_input(mod, identifier, value):
+    """Sets a Geometry Nodes modifier's input: `mod.properties.inputs.<identifier>.value` in
+    Blender 5.3, which refuses the ID property on the modifier that 4.4–5.0 use."""
+    props = getattr(mod, "properties", None)
+    if props is not None and hasattr(props, "inputs"):
+        getattr(props.inputs, identifier).value = value
+    else:
+        mod[identifier] = value
+
+
 def attach(context, shot_name, fmt, objects, csv_path, frames, collection):
     """Adds id/velocity to every imported USD instancer. glTF imports are left as they are
     (each bee is an animated object there; Blender blurs object motion by itself)."""
@@ -262,7 +272,7 @@ def attach(context, shot_name, fmt, objects, csv_path, frames, collection):
         mod.node_group = ng
         key = next(i.identifier for i in ng.interface.items_tree
                    if getattr(i, "in_out", "") == "INPUT" and i.name == "Motion")
-        mod[key] = helper
+        set_modifier_input(mod, key, helper)
         update_helper(helper, current)
     scene.frame_set(current)
 

@@ -9,13 +9,15 @@ completion synchronously.
 import atexit
 import os
 import pathlib
+import re
+import shutil
 import tempfile
 import time
 
 import bpy
 from bpy.props import EnumProperty, StringProperty
 
-from . import binary, importer, motion, props, runner, shot_builder
+from . import binary, display, importer, motion, props, runner, shot_builder
 
 _active = {"job": None}  # one bake at a time
 
@@ -31,19 +33,42 @@ def _blend_dir():
     return pathlib.Path(path).parent if path else None
 
 
-def _temp_dir():
-    d = pathlib.Path(tempfile.gettempdir()) / "beeswarm"
+def _unsaved_dir():
+    """Where an unsaved file's shots and caches go: a folder in Blender's own temporary
+    directory for this session (`bpy.app.tempdir`, one per running Blender, so per open
+    file; Blender removes it when it quits), never a folder shared by every Blender."""
+    d = pathlib.Path(bpy.app.tempdir or tempfile.gettempdir()) / "beeswarm_unsaved"
     d.mkdir(parents=True, exist_ok=True)
     return d
 
 
 def cache_dir(settings, shot_name):
+    """`<cache folder>/<shot>/`: by default `//beeswarm_cache/<shot>/` beside the .blend;
+    for an unsaved file (where `//` means nothing) under Blender's temporary directory."""
     raw = settings.cache_dir or "//beeswarm_cache/"
     if raw.startswith("//") and not bpy.data.filepath:
-        base = _temp_dir() / "cache"
+        base = _unsaved_dir() / "beeswarm_cache"
     else:
         base = pathlib.Path(bpy.path.abspath(raw))
     return base / shot_name
+
+
+def staging_dir(out_dir):
+    """The folder a bake writes into before it replaces the cache (same file system, so
+    the final renames are cheap and a cancelled bake leaves the cache untouched)."""
+    return out_dir.parent / f".{out_dir.name}.baking"
+
+
+def _replace_path(src, dst):
+    """Moves src over dst (a file, or a folder such as `<name>.clips/`)."""
+    if src.is_dir() and dst.exists():
+        old = dst.with_name(f".{dst.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(dst, old)
+        os.replace(src, dst)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(src, dst)
 
 
 def _written_by_addon(path):
@@ -60,9 +85,38 @@ def _kill_running_bake():
     job = _active["job"]
     if job is not None and job.process is not None and job.process.running():
         job.process.cancel(grace=0.5)
+        job.discard()
 
 
 atexit.register(_kill_running_bake)
+
+
+_KEY = re.compile(r"\b(swarm|obstacle|target)\[(\d+)\]")
+
+
+def name_blender_objects(message, shot):
+    """The binary names shot keys (`obstacle[2].radius`); after each, the Blender object or
+    swarm it came from, so the artist knows what to fix: `obstacle[2] (Blender object
+    'post').radius`."""
+    if not shot:
+        return message
+    tables = {"swarm": shot.get("swarm", []), "obstacle": shot.get("obstacle", []),
+              "target": shot.get("target", [])}
+
+    def label(m):
+        kind, i = m.group(1), int(m.group(2))
+        items = tables[kind]
+        if i >= len(items) or not items[i].get("name"):
+            return m.group(0)
+        what = "swarm" if kind == "swarm" else "Blender object"
+        return f"{m.group(0)} ({what} '{items[i]['name']}')"
+    return _KEY.sub(label, message)
+
+
+def ensure_swarm(settings):
+    """A scene that never had a swarm bakes the default one (as the panel shows it)."""
+    if not len(settings.swarms):
+        props.add_swarm(settings)
 
 
 class Job:
@@ -72,11 +126,17 @@ class Job:
         scene = context.scene
         self.settings = scene.beeswarm
         self.format = op.format
+        # Also baked besides the imported format (the panel's Formats; an operator call
+        # bakes only `format` unless it says otherwise).
+        self.formats = [self.format] + sorted(set(op.also_formats) - {self.format})
+        self.keep_scene_range = False
+        self.shot = None
         self.warnings = []
         bin_path, msg = binary.resolve(op.binary_path or props.preference_binary(context))
         if bin_path is None:
             raise BakeError(msg)
         self.binary = bin_path
+        self.shot_text = None
         if op.shot_path:
             shot = pathlib.Path(bpy.path.abspath(op.shot_path))
             if not shot.is_file():
@@ -87,43 +147,68 @@ class Job:
                 # The binary reports it with line and column; let it speak.
                 self.name, self.fps, self.frames = shot.stem, None, None
                 self.info_error = str(e)
-            self.shot_path = shot
+            self.bake_shot = shot
         else:
+            ensure_swarm(self.settings)
             try:
                 shot, self.warnings = shot_builder.build_shot(scene, self.settings)
             except shot_builder.ShotBuildError as e:
                 raise BakeError(str(e)) from None
+            self.shot = shot
+            self.keep_scene_range = not self.settings.use_scene_frames
             self.name = shot["scene"]["name"]
             self.fps = shot["scene"]["fps"]
             self.frames = tuple(shot["scene"]["frames"])
-            folder = _blend_dir() or _temp_dir()
-            self.shot_path = folder / f"{self.name}.shot.toml"
             source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
-            text = shot_builder.shot_toml(shot, source)
-            if self.shot_path.exists() and not _written_by_addon(self.shot_path):
-                raise BakeError(f"{self.shot_path} exists and was not written by the add-on; "
-                                f"give the shot another name (it would be overwritten)")
-            tmp = self.shot_path.with_name(self.shot_path.name + ".tmp")
-            tmp.write_text(text, encoding="utf-8")
-            os.replace(tmp, self.shot_path)
+            self.shot_text = shot_builder.shot_toml(shot, source)
         self.out_dir = cache_dir(self.settings, self.name)
-        self.out_dir.mkdir(parents=True, exist_ok=True)
-        fmt, _ = FORMAT_FILES[self.format]
-        self.argv = runner.bake_argv(self.binary, self.shot_path, self.out_dir, [fmt, "csv"])
+        # The shot built from the scene lives with its cache, `<cache>/<name>.shot.toml`,
+        # and both are replaced together only when the bake succeeds (commit()).
+        self.shot_path = (self.out_dir / f"{self.name}.shot.toml" if self.shot_text is not None
+                          else self.bake_shot)
+        if self.shot_text is not None and self.shot_path.exists() \
+                and not _written_by_addon(self.shot_path):
+            raise BakeError(f"{self.shot_path} exists and was not written by the add-on; "
+                            f"give the shot another name (it would be overwritten)")
+        self.staging = staging_dir(self.out_dir)
+        shutil.rmtree(self.staging, ignore_errors=True)  # a bake Blender never finished
+        self.staging.mkdir(parents=True)
+        if self.shot_text is not None:
+            self.bake_shot = self.staging / self.shot_path.name
+            self.bake_shot.write_text(self.shot_text, encoding="utf-8")
+        fmts = [FORMAT_FILES[f][0] for f in self.formats]
+        self.argv = runner.bake_argv(self.binary, self.bake_shot, self.staging, fmts + ["csv"])
         self.process = None
         self.started = None
 
     def start(self):
         self.started = time.monotonic()
         try:
-            self.process = runner.BakeProcess(self.argv, cwd=str(self.shot_path.parent))
+            self.process = runner.BakeProcess(self.argv, cwd=str(self.bake_shot.parent))
         except OSError as e:
+            self.discard()
             raise BakeError(f"Cannot run {self.binary}: {e}") from None
+
+    def commit(self):
+        """After exit 0: every file the bake wrote (and the shot it baked) replaces its
+        namesake in the cache folder; then the staging folder goes."""
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        for p in sorted(self.staging.iterdir()):
+            if p.name.endswith(".tmp"):
+                continue
+            _replace_path(p, self.out_dir / p.name)
+        shutil.rmtree(self.staging, ignore_errors=True)
+
+    def discard(self):
+        """A failed or cancelled bake: its partial outputs and its shot go; the cache and
+        the shot beside it stay as they were."""
+        shutil.rmtree(self.staging, ignore_errors=True)
 
     def outputs(self):
         """(cache path, tracks CSV path) from the `done` event, else the expected names."""
         ext = FORMAT_FILES[self.format][1]
-        outs = [pathlib.Path(p) for p in (self.process.outputs or [])]
+        # The `done` event names the staging folder's files; they are in out_dir now.
+        outs = [self.out_dir / pathlib.Path(p).name for p in (self.process.outputs or [])]
         cache = next((p for p in outs if p.suffix in (ext, ".gltf")), None)
         csv = next((p for p in outs if p.name.endswith(".tracks.csv")), None)
         cache = cache or self.out_dir / f"{self.name}{ext}"
@@ -138,20 +223,47 @@ class Job:
         name = cache.name[: -len(cache.suffix)]
         fps, frames = self.fps, self.frames
         if fps is None or frames is None:
-            _, fps, frames = importer.shot_info(str(self.shot_path))
+            _, fps, frames = importer.shot_info(str(self.bake_shot))
 
         def after(collection, objects):
             if self.settings.instance_motion:
                 motion.attach(context, name, self.format, objects, csv, frames, collection)
+            asset = self.settings.asset
+            if asset is not None and self.format == "USD":
+                if asset.name in collection.all_objects:
+                    raise BakeError(f"The insect asset '{asset.name}' is part of the swarm")
+                if not display.use_asset(objects, asset):
+                    raise BakeError(f"No instancer in {cache.name} to draw '{asset.name}' on")
+            display.apply(context.scene, objects)
 
         try:
             return importer.import_cache(context, name, str(cache), self.format, fps, frames,
-                                         after=after)
+                                         after=after, set_range=not self.keep_scene_range)
         except Exception as e:
             raise BakeError(f"Import of {cache.name} failed: {e}") from e
 
+    def keep_failed_shot(self):
+        """A failing bake's shot (built from the scene) is worth reading, but not beside the
+        cache it did not make: it moves to Blender's session temp folder and the message
+        points there."""
+        if self.shot_text is None or not self.bake_shot.is_file():
+            return None
+        kept = pathlib.Path(bpy.app.tempdir or tempfile.gettempdir()) / "beeswarm_failed"
+        kept.mkdir(parents=True, exist_ok=True)
+        kept = kept / self.bake_shot.name
+        shutil.copyfile(self.bake_shot, kept)
+        return kept
+
     def failure(self):
-        return runner.error_message(self.process.stderr, self.process.returncode)
+        text = name_blender_objects(
+            runner.error_message(self.process.stderr, self.process.returncode), self.shot)
+        kept = self.keep_failed_shot()
+        if kept is not None:
+            text = text.replace(str(self.bake_shot), str(kept))
+        if self.shot is not None and f"{self.name}.shot.toml:" in text:
+            # The quoted lines are the shot file's, in its Y-up axes.
+            text += "\n(The shot file is Y-up: its [x, y, z] is Blender's (x, −z, y).)"
+        return text
 
 
 class BEESWARM_OT_bake(bpy.types.Operator):
@@ -159,11 +271,16 @@ class BEESWARM_OT_bake(bpy.types.Operator):
 
     bl_idname = "beeswarm.bake"
     bl_label = "Bake Swarm"
-    bl_options = {"REGISTER"}
+    # UNDO: one undo step per bake; undoing it restores the previous import (a glTF swarm
+    # entirely; a USD swarm's objects, which read the cache file now on disk).
+    bl_options = {"REGISTER", "UNDO"}
 
     shot_path: StringProperty(name="Shot File", subtype="FILE_PATH", default="",
                               description="Shot to bake; empty = build the shot from the scene")
-    format: EnumProperty(name="Format", items=props.FORMATS, default="USD")
+    format: EnumProperty(name="Format", items=props.FORMATS, default="USD",
+                         description="The cache to bake and import")
+    also_formats: EnumProperty(name="Also Bake", items=props.FORMATS, options={"ENUM_FLAG"},
+                               default=set(), description="Caches baked besides `format`")
     binary_path: StringProperty(name="Binary", subtype="FILE_PATH", default="",
                                 description="beeswarm binary; empty = the add-on's preference")
 
@@ -197,6 +314,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
                     break
         except BaseException:  # Ctrl-C in a background Blender: stop the bake too
             job.process.cancel()
+            job.discard()
             _active["job"] = None
             raise
         try:
@@ -224,6 +342,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
         job = self._job
         if event.type == "ESC" and event.value == "PRESS":
             job.process.cancel()
+            job.discard()
             self._end_modal(context)
             msg = f"Bake of {job.name} cancelled; the previous cache is unchanged"
             context.scene.beeswarm.last_message = msg
@@ -249,6 +368,7 @@ class BEESWARM_OT_bake(bpy.types.Operator):
     def cancel(self, context):  # Blender closing the window mid-bake
         if self._job is not None and self._job.process is not None:
             self._job.process.cancel()
+            self._job.discard()
         self._end_modal(context)
 
     # -- shared -------------------------------------------------------------------------------
@@ -261,6 +381,9 @@ class BEESWARM_OT_bake(bpy.types.Operator):
         except OSError as e:
             self._fail(context, f"Cannot write the shot: {e}")
             return None
+        if job.settings.asset is not None and job.format != "USD":
+            job.warnings.append(f"Insect Asset '{job.settings.asset.name}' is used with USD "
+                                f"only; the glTF bees keep their own meshes")
         for w in job.warnings:
             self.report({"WARNING"}, w)
         return job
@@ -276,7 +399,15 @@ class BEESWARM_OT_bake(bpy.types.Operator):
     def _complete(self, context, job):
         rc = job.process.returncode
         if rc != 0:
-            self._fail(context, f"Bake failed: {job.failure()}")
+            message = job.failure()
+            job.discard()
+            self._fail(context, f"Bake failed: {message}")
+            return {"CANCELLED"}
+        try:
+            job.commit()
+        except OSError as e:
+            job.discard()
+            self._fail(context, f"Cannot move the new cache into {job.out_dir}: {e}")
             return {"CANCELLED"}
         try:
             coll = job.finish(context)
@@ -321,6 +452,7 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
     filepath: StringProperty(subtype="FILE_PATH", default="")
 
     def execute(self, context):
+        ensure_swarm(context.scene.beeswarm)
         try:
             shot, warnings = shot_builder.build_shot(context.scene, context.scene.beeswarm)
         except shot_builder.ShotBuildError as e:
@@ -328,7 +460,7 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
             return {"CANCELLED"}
         for w in warnings:
             self.report({"WARNING"}, w)
-        path = self.filepath or str((_blend_dir() or _temp_dir())
+        path = self.filepath or str((_blend_dir() or _unsaved_dir())
                                     / f"{shot['scene']['name']}.shot.toml")
         path = pathlib.Path(bpy.path.abspath(path))
         if path.exists() and not _written_by_addon(path):

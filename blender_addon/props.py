@@ -1,7 +1,7 @@
 """Preferences and the scene's bake settings."""
 import bpy
-from bpy.props import (BoolProperty, EnumProperty, FloatVectorProperty, IntProperty,
-                       PointerProperty, StringProperty)
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
+                       FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
 from . import binary
 
@@ -37,6 +37,33 @@ def preset_items(self, context):
     return items
 
 
+def preset_values(doc, swarm):
+    """{parameter: value} of the swarm's chosen built-in preset ({} for a preset file or a
+    binary that does not list values)."""
+    info = binary.model_info(doc, swarm.model) or {}
+    preset = next((p for p in info.get("presets", []) if p["name"] == swarm.preset), {})
+    return preset.get("values", {})
+
+
+def _owner_swarm(item):
+    """The swarm an override item belongs to (from its RNA path, `beeswarm.swarms[i]...`)."""
+    path = item.path_from_id()
+    i = int(path.split("swarms[", 1)[1].split("]", 1)[0])
+    return item.id_data.beeswarm.swarms[i]
+
+
+def param_items(self, context):
+    doc, _ = models_doc(context)
+    swarm = _owner_swarm(self)
+    m = binary.model_info(doc, swarm.model) or doc["models"][0]
+    items = [(q["name"], q["name"], f"{q['doc']} ({q['unit']}, {q['min']:g} – {q['max']:g}, "
+                                    f"default {q['default']:g})") for q in m.get("params", [])]
+    if not items:  # the fallback list knows no parameters
+        items = [("speed", "speed", "Preferred speed, m/s")]
+    _items[("params", m["name"])] = items
+    return items
+
+
 def _model_changed(self, context):
     # A new model starts from its own default preset (its first), whichever was chosen.
     doc, _ = models_doc(context)
@@ -48,6 +75,11 @@ FORMATS = [
     ("USD", "USD", "Bake a USDA PointInstancer and import it"),
     ("GLTF", "glTF", "Bake a binary glTF (.glb) and import it"),
 ]
+
+
+def _display_changed(self, context):
+    from . import display
+    display.apply(self.id_data)
 
 
 class BeeswarmPreferences(bpy.types.AddonPreferences):
@@ -82,6 +114,49 @@ def preference_binary(context=None):
     return ""
 
 
+class BeeswarmOverride(bpy.types.PropertyGroup):
+    """One model parameter set for one swarm, over its preset (`[swarm.params]`)."""
+    param: EnumProperty(name="Parameter", items=param_items,
+                        description="A parameter of the swarm's model (`beeswarm models`)")
+    value: FloatProperty(name="Value", default=1.0, precision=4)
+
+
+class BeeswarmSwarm(bpy.types.PropertyGroup):
+    """One `[[swarm]]` of the shot."""
+    name: StringProperty(name="Name", default="bees",
+                         description="The swarm's name in the caches (letters, digits, _)")
+    count: IntProperty(name="Count", default=200, min=0, soft_max=20000,
+                       description="Number of bees")
+    model: EnumProperty(name="Model", items=model_items, update=_model_changed,
+                        description="How the swarm flies (the binary's `beeswarm models`)")
+    preset: EnumProperty(name="Preset", items=preset_items,
+                         description="The model's parameters to start from")
+    preset_file: StringProperty(name="Preset File", subtype="FILE_PATH", default="")
+    spawn_object: PointerProperty(
+        name="Spawn", type=bpy.types.Object,
+        description="The bees start inside this object's bounds (a sphere empty: a sphere); "
+                    "empty = the centre and size below")
+    spawn_center: FloatVectorProperty(name="Spawn Centre", subtype="TRANSLATION", size=3,
+                                      default=(0.0, 0.0, 1.0))
+    spawn_size: FloatVectorProperty(name="Spawn Size", subtype="XYZ", size=3,
+                                    default=(1.0, 1.0, 1.0), min=0.0)
+    bounds_object: PointerProperty(
+        name="Bounds", type=bpy.types.Object,
+        description="A soft box the swarm stays in: this object's world bounding box; "
+                    "empty = the spawn region grown by 1.5 m")
+    bee_length: FloatProperty(name="Bee Length", default=0.012, min=0.0001, max=1.0,
+                              subtype="DISTANCE", precision=4, unit="LENGTH",
+                              description="Body length (the contact radius is a sixth of it)")
+    size_variation: FloatProperty(name="Size Variation", default=0.1, min=0.0, max=0.9,
+                                  description="Each bee's size factor is drawn from "
+                                              "[1 − v, 1 + v]")
+    speed_variation: FloatProperty(name="Speed Variation", default=0.15, min=0.0, max=0.9,
+                                   description="Each bee's speed factor is drawn from "
+                                               "[1 − v, 1 + v]")
+    overrides: CollectionProperty(type=BeeswarmOverride)
+    override_index: IntProperty(default=0)
+
+
 class BeeswarmSettings(bpy.types.PropertyGroup):
     source: EnumProperty(
         name="Shot",
@@ -93,28 +168,20 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
     shot_name: StringProperty(name="Name", default="beeswarm",
                               description="The shot's name: the cache's file names and the "
                                           "imported collection")
-    swarm_name: StringProperty(name="Swarm", default="bees")
-    count: IntProperty(name="Count", default=200, min=0, soft_max=20000,
-                       description="Number of bees")
-    model: EnumProperty(name="Model", items=model_items, update=_model_changed,
-                        description="How the swarm flies (the binary's `beeswarm models`)")
-    preset: EnumProperty(name="Preset", items=preset_items,
-                         description="The model's parameters to start from")
-    preset_file: StringProperty(name="Preset File", subtype="FILE_PATH", default="")
-    seed: IntProperty(name="Seed", default=1, min=0)
+    swarms: CollectionProperty(type=BeeswarmSwarm)
+    swarm_index: IntProperty(name="Swarm", default=0)
+    seed: IntProperty(name="Seed", default=1, min=0,
+                      description="The shot's seed: spawn positions, variation, noise")
     substeps: IntProperty(name="Substeps", default=4, min=1, max=64)
-    spawn_object: PointerProperty(
-        name="Spawn", type=bpy.types.Object,
-        description="The bees start inside this object's bounds (a sphere empty: a sphere); "
-                    "empty = the centre and size below")
-    spawn_center: FloatVectorProperty(name="Spawn Centre", subtype="TRANSLATION", size=3,
-                                      default=(0.0, 0.0, 1.0))
-    spawn_size: FloatVectorProperty(name="Spawn Size", subtype="XYZ", size=3,
-                                    default=(1.0, 1.0, 1.0), min=0.0)
+    use_scene_frames: BoolProperty(name="Scene Frame Range", default=True,
+                                   description="Bake the scene's frame range; off = the "
+                                               "range below (the scene's own is left alone)")
+    frame_start: IntProperty(name="Start", default=1)
+    frame_end: IntProperty(name="End", default=120)
     obstacles: PointerProperty(
         name="Obstacles", type=bpy.types.Collection,
-        description="Spheres, boxes and cylinders (told by the custom property beeswarm_type, "
-                    "the mesh's shape or the name)")
+        description="Spheres, boxes, cylinders, capsules and planes (told by the custom "
+                    "property beeswarm_type, the mesh's shape or the name)")
     targets: PointerProperty(
         name="Targets", type=bpy.types.Collection,
         description="Empties: nest, flower or attractor (custom property beeswarm_type or "
@@ -122,19 +189,50 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
     ground: BoolProperty(name="Ground Plane", default=False,
                          description="Add a ground plane at Z = 0")
     wind: FloatVectorProperty(name="Wind", subtype="VELOCITY", size=3, default=(0.0, 0.0, 0.0))
-    format: EnumProperty(name="Format", items=FORMATS, default="USD")
+    wing_flap_hz: FloatProperty(
+        name="Wing Flap", default=0.0, min=0.0, soft_max=12.0, unit="NONE",
+        description="glTF: visible wing flap in Hz; 0 = wings still at mid-stroke with a more "
+                    "transparent membrane (what a camera sees of a 230 Hz beat)")
+    formats: EnumProperty(name="Formats", items=FORMATS, options={"ENUM_FLAG"}, default={"USD"},
+                          description="Caches to bake (the tracks CSV always comes too)")
+    format: EnumProperty(name="Import", items=FORMATS, default="USD",
+                         description="Which baked cache to import")
     cache_dir: StringProperty(
         name="Cache Folder", subtype="DIR_PATH", default="//beeswarm_cache/",
         description="Where caches are written (// = next to the .blend; an unsaved file "
-                    "uses a temporary folder)")
+                    "uses Blender's temporary folder)")
     instance_motion: BoolProperty(
         name="Instance id & velocity", default=True,
         description="USD: give the imported instances the bees' ids and velocities from the "
                     "tracks CSV (Blender's USD import drops them)")
+    display_percent: IntProperty(
+        name="Display", default=100, min=1, max=100, subtype="PERCENTAGE",
+        update=_display_changed,
+        description="Share of the bees drawn in the viewport (renders draw every bee)")
+    viewport_points: BoolProperty(
+        name="Points in Viewport", default=False, update=_display_changed,
+        description="USD: draw each bee as a point in the viewport (light for big swarms); "
+                    "renders draw the bees")
+    asset: PointerProperty(
+        name="Insect Asset", type=bpy.types.Object,
+        description="USD: draw this object on every bee instead of the cache's bee (model it "
+                    "facing +X with +Z up, at bee scale: 1 unit = 1 m)")
     last_message: StringProperty(name="Last Bake", default="")
 
 
-classes = (BeeswarmPreferences, BeeswarmSettings)
+def add_swarm(settings):
+    """A new swarm with the defaults and a name not yet used; it becomes the active one."""
+    used = {s.name for s in settings.swarms}
+    name, k = "bees", 2
+    while name in used:
+        name, k = f"bees_{k}", k + 1
+    sw = settings.swarms.add()
+    sw.name = name
+    settings.swarm_index = len(settings.swarms) - 1
+    return sw
+
+
+classes = (BeeswarmPreferences, BeeswarmOverride, BeeswarmSwarm, BeeswarmSettings)
 
 
 def register():

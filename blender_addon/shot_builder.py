@@ -11,6 +11,7 @@ then Y, then Z about world axes (R = Rz·Ry·Rx), which is Blender's own 'XYZ' c
 import math
 import re
 
+import bpy
 from mathutils import Matrix, Vector
 
 from . import toml_writer
@@ -25,6 +26,11 @@ TYPE_PROP = "beeswarm_type"
 
 class ShotBuildError(Exception):
     """The scene cannot make a valid shot; the message is for the artist."""
+
+
+class UnsupportedShape(Exception):
+    """An obstacle whose shape the shot format has no type for (an ellipsoid, an elliptic
+    cylinder, a sheared box): reported, never approximated."""
 
 
 def to_shot(v):
@@ -156,27 +162,33 @@ def obstacle_kind(obj):
     return _name_type(obj.name, _OBSTACLE_WORDS)
 
 
-def _decompose(mw):
-    """World matrix → (rotation 3x3 orthonormal, scale Vector). Shear (a non-uniformly
-    scaled parent of a rotated child) has no exact shot equivalent; the nearest rotation and
-    the column lengths are used."""
+def _decompose(obj):
+    """World matrix → (rotation 3x3 orthonormal, scale Vector). Shear (a rotated child of a
+    non-uniformly scaled parent) has no shot equivalent: UnsupportedShape."""
+    mw = obj.matrix_world
     loc, quat, scale = mw.decompose()
+    rebuilt = Matrix.LocRotScale(loc, quat, scale)
+    size = max(max(abs(x) for x in scale), 1e-12)
+    if max(abs(rebuilt[i][j] - mw[i][j]) for i in range(3) for j in range(3)) > 1e-5 * size:
+        raise UnsupportedShape(f"'{obj.name}' is sheared (a rotated child of a non-uniformly "
+                               f"scaled parent); apply the parent's scale")
     return quat.to_matrix(), scale
 
 
 def obstacle_entry(obj, kind, warnings):
     mw = obj.matrix_world
-    rot, scale = _decompose(mw)
+    rot, scale = _decompose(obj)
     c_local, h_local = _local_bounds(obj)
     center = mw @ c_local
     name = obj.name
     if kind == "sphere":
         if obj.type == "EMPTY":
             h_local = Vector([obj.empty_display_size] * 3)
-        hw = Vector((h_local.x * scale.x, h_local.y * scale.y, h_local.z * scale.z))
+        hw = Vector((abs(h_local.x * scale.x), abs(h_local.y * scale.y), abs(h_local.z * scale.z)))
         if max(hw) - min(hw) > 1e-4 * max(hw):
-            warnings.append(f"{name}: a non-uniformly scaled sphere is approximated by its "
-                            f"largest radius")
+            raise UnsupportedShape(f"'{name}' is a non-uniformly scaled sphere (an ellipsoid: "
+                                   f"radii {hw.x:.3g}, {hw.y:.3g}, {hw.z:.3g} m); scale it "
+                                   f"uniformly")
         return {"type": "sphere", "name": name, "center": to_shot(center), "radius": max(hw)}
     if kind == "box":
         if obj.type == "EMPTY":
@@ -186,15 +198,20 @@ def obstacle_entry(obj, kind, warnings):
                 "size": [size_b[0], size_b[2], size_b[1]],
                 "rotation": rotation_to_shot_euler(rot)}
     if kind == "cylinder":
-        rx, ry = h_local.x * scale.x, h_local.y * scale.y
+        rx, ry = abs(h_local.x * scale.x), abs(h_local.y * scale.y)
         if abs(rx - ry) > 1e-4 * max(rx, ry):
-            warnings.append(f"{name}: an elliptic cylinder is approximated by its larger radius")
+            raise UnsupportedShape(f"'{name}' is an elliptic cylinder (radii {rx:.3g} and "
+                                   f"{ry:.3g} m); give X and Y the same scale")
         return {"type": "cylinder", "name": name, "center": to_shot(center),
                 "radius": max(rx, ry), "height": 2 * h_local.z * scale.z,
                 "rotation": rotation_to_shot_euler(rot)}
     if kind == "capsule":
         # Along the local Z axis; radius from X/Y, the ends' spheres included in Z.
-        r = max(h_local.x * scale.x, h_local.y * scale.y)
+        rx, ry = abs(h_local.x * scale.x), abs(h_local.y * scale.y)
+        if abs(rx - ry) > 1e-4 * max(rx, ry):
+            raise UnsupportedShape(f"'{name}' is an elliptic capsule (radii {rx:.3g} and "
+                                   f"{ry:.3g} m); give X and Y the same scale")
+        r = rx
         half = max(h_local.z * scale.z - r, 0.0)
         axis = rot @ Vector((0, 0, 1))
         return {"type": "capsule", "name": name, "a": to_shot(center - axis * half),
@@ -249,7 +266,10 @@ def target_entry(obj, kind, scene, frames, depsgraph_frame):
 
 # ---------------------------------------------------------------------------------------
 
-def scene_frames(scene):
+def scene_frames(scene, settings=None):
+    """The frame range to bake: the scene's, or the panel's own when it says so."""
+    if settings is not None and not settings.use_scene_frames:
+        return [int(settings.frame_start), int(settings.frame_end)]
     return [int(scene.frame_start), int(scene.frame_end)]
 
 
@@ -257,64 +277,113 @@ def scene_fps(scene):
     return scene.render.fps / (scene.render.fps_base or 1.0)
 
 
-def build_shot(scene, settings, name=None):
-    """Returns (shot dict, warnings). Raises ShotBuildError for a scene that cannot bake."""
-    warnings = []
-    if settings.count < 1:
-        raise ShotBuildError(f"The swarm needs at least 1 bee (count is {settings.count})")
-    frames = scene_frames(scene)
-    if frames[1] < frames[0]:
-        raise ShotBuildError(f"The scene's frame range is reversed ({frames[0]}–{frames[1]})")
-    shot_name = safe_name(name or settings.shot_name or "beeswarm")
+def _world_box(obj):
+    """(centre, size) of an object's world-space bounding box (an empty: its display cube)."""
+    if obj.type == "EMPTY":
+        size = Vector([2 * obj.empty_display_size * abs(s) for s in obj.matrix_world.to_scale()])
+        return obj.matrix_world.translation.copy(), size
+    corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
+    lo = Vector((min(p.x for p in corners), min(p.y for p in corners), min(p.z for p in corners)))
+    hi = Vector((max(p.x for p in corners), max(p.y for p in corners), max(p.z for p in corners)))
+    return (lo + hi) / 2, hi - lo
+
+
+def _box_size_to_shot(size):
+    return [abs(size.x), abs(size.z), abs(size.y)]
+
+
+def swarm_entry(sw):
+    """One `[[swarm]]` from a panel swarm. Errors name the swarm."""
+    label = f"Swarm '{sw.name}'"
+    if sw.count < 1:
+        raise ShotBuildError(f"{label} needs at least 1 bee (count is {sw.count})")
     # A menu whose stored choice no longer exists (another binary) reads as "".
-    model = settings.model or "bee"
-    preset = settings.preset
+    model = sw.model or "bee"
+    preset = sw.preset
     if preset == "FILE":
-        if not settings.preset_file:
-            raise ShotBuildError("Choose a preset file, or a built-in preset")
-        preset = settings.preset_file
+        if not sw.preset_file:
+            raise ShotBuildError(f"{label}: choose a preset file, or a built-in preset")
+        # Absolute: the shot is written into the cache folder, and the binary reads a
+        # relative preset path from the shot file's folder, not the .blend's.
+        preset = bpy.path.abspath(sw.preset_file)
     elif not preset:
-        raise ShotBuildError(f"Choose a preset of the {model} model")
-    swarm = {
-        "name": safe_name(settings.swarm_name or "bees", "bees", identifier=True),
-        "count": int(settings.count),
+        raise ShotBuildError(f"{label}: choose a preset of the {model} model")
+    entry = {
+        "name": safe_name(sw.name or "bees", "bees", identifier=True),
+        "count": int(sw.count),
         "model": model,
         "preset": preset,
     }
     # Spawn region: an object's world bounds, else the panel's centre and size.
-    sp = settings.spawn_object
+    sp = sw.spawn_object
     if sp is not None:
-        corners = [sp.matrix_world @ Vector(c) for c in sp.bound_box]
-        lo = Vector((min(p.x for p in corners), min(p.y for p in corners), min(p.z for p in corners)))
-        hi = Vector((max(p.x for p in corners), max(p.y for p in corners), max(p.z for p in corners)))
-        centre, size = (lo + hi) / 2, hi - lo
         if sp.type == "EMPTY" and sp.empty_display_type == "SPHERE":
-            radius = sp.empty_display_size * max(sp.matrix_world.to_scale())
-            swarm["spawn"] = {"shape": "sphere", "center": to_shot(sp.matrix_world.translation),
+            radius = sp.empty_display_size * max(abs(x) for x in sp.matrix_world.to_scale())
+            entry["spawn"] = {"shape": "sphere", "center": to_shot(sp.matrix_world.translation),
                               "radius": radius}
         else:
-            if sp.type == "EMPTY":
-                size = Vector([2 * sp.empty_display_size * s for s in sp.matrix_world.to_scale()])
-                centre = sp.matrix_world.translation
-            swarm["spawn"] = {"shape": "box", "center": to_shot(centre),
-                              "size": [abs(size.x), abs(size.z), abs(size.y)]}
+            centre, size = _world_box(sp)
+            entry["spawn"] = {"shape": "box", "center": to_shot(centre),
+                              "size": _box_size_to_shot(size)}
+        where = f"the spawn object '{sp.name}'"
     else:
-        s = settings.spawn_size
-        swarm["spawn"] = {"shape": "box", "center": to_shot(settings.spawn_center),
-                          "size": [s[0], s[2], s[1]]}
-    if min(swarm["spawn"].get("size", [1.0])) <= 0 or swarm["spawn"].get("radius", 1.0) <= 0:
-        raise ShotBuildError("The spawn region has no volume")
+        size = sw.spawn_size
+        entry["spawn"] = {"shape": "box", "center": to_shot(sw.spawn_center),
+                          "size": [size[0], size[2], size[1]]}
+        where = "its spawn size"
+    if min(entry["spawn"].get("size", [1.0])) <= 0 or entry["spawn"].get("radius", 1.0) <= 0:
+        raise ShotBuildError(f"{label}: the spawn region has no volume ({where} is flat)")
+    if sw.bounds_object is not None:
+        centre, size = _world_box(sw.bounds_object)
+        if min(abs(size.x), abs(size.y), abs(size.z)) <= 0:
+            raise ShotBuildError(f"{label}: the bounds object '{sw.bounds_object.name}' is flat")
+        entry["bounds"] = {"center": to_shot(centre), "size": _box_size_to_shot(size)}
+    entry["variation"] = {"size": float(sw.size_variation), "speed": float(sw.speed_variation)}
+    entry["bee"] = {"length": float(sw.bee_length), "radius": float(sw.bee_length) / 6.0}
+    params = {}
+    for o in sw.overrides:
+        if not o.param:
+            raise ShotBuildError(f"{label}: an override names no parameter of the {model} model")
+        if o.param in params:
+            raise ShotBuildError(f"{label}: the parameter {o.param} is overridden twice")
+        params[o.param] = float(o.value)
+    if params:
+        entry["params"] = params
+    return entry
 
-    obstacles = []
+
+def build_shot(scene, settings, name=None):
+    """Returns (shot dict, warnings). Raises ShotBuildError for a scene that cannot bake;
+    its message names the Blender object or swarm at fault."""
+    warnings = []
+    frames = scene_frames(scene, settings)
+    if frames[1] < frames[0]:
+        raise ShotBuildError(f"The frame range is reversed ({frames[0]}–{frames[1]})")
+    if not len(settings.swarms):
+        raise ShotBuildError("The shot has no swarm: add one with + beside the Swarms list")
+    shot_name = safe_name(name or settings.shot_name or "beeswarm")
+    swarms = [swarm_entry(sw) for sw in settings.swarms]
+    names = [sw["name"] for sw in swarms]
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise ShotBuildError(f"Two swarms are named {dupes[0]}: give each its own name")
+
+    obstacles, problems = [], []
     for obj in _objects(settings.obstacles):
         if obj.type not in {"MESH", "EMPTY", "CURVE", "SURFACE", "META"}:
             continue
         kind = obstacle_kind(obj)
         if kind is None:
-            warnings.append(f"{obj.name}: not recognised as a sphere, box or cylinder; skipped "
-                            f"(set the custom property {TYPE_PROP})")
+            problems.append(f"'{obj.name}' is not a sphere, box, cylinder, capsule or plane "
+                            f"(set its custom property {TYPE_PROP}, or take it out of the "
+                            f"obstacle collection)")
             continue
-        obstacles.append(obstacle_entry(obj, kind, warnings))
+        try:
+            obstacles.append(obstacle_entry(obj, kind, warnings))
+        except UnsupportedShape as e:
+            problems.append(str(e))
+    if problems:
+        raise ShotBuildError("Obstacles the shot format cannot describe: " + "; ".join(problems))
     if settings.ground:
         obstacles.append({"type": "plane", "name": "ground", "point": [0.0, 0.0, 0.0],
                           "normal": [0.0, 1.0, 0.0]})
@@ -336,15 +405,16 @@ def build_shot(scene, settings, name=None):
             kind = "attractor"
         targets.append(target_entry(obj, kind, scene, frames, position_at))
 
+    fps = float(scene_fps(scene))
     shot = {
         "scene": {
             "name": shot_name,
-            "fps": float(scene_fps(scene)),
+            "fps": fps,
             "frames": frames,
             "substeps": int(settings.substeps),
             "seed": int(settings.seed),
         },
-        "swarm": [swarm],
+        "swarm": swarms,
     }
     if obstacles:
         shot["obstacle"] = obstacles
@@ -352,6 +422,11 @@ def build_shot(scene, settings, name=None):
         shot["target"] = targets
     if any(abs(x) > 0 for x in settings.wind):
         shot["wind"] = {"velocity": to_shot(settings.wind)}
+    if settings.wing_flap_hz > 0:
+        if settings.wing_flap_hz > fps / 2:
+            raise ShotBuildError(f"Wing Flap {settings.wing_flap_hz:g} Hz is above half the "
+                                 f"frame rate ({fps / 2:g} Hz) and would alias")
+        shot["output"] = {"wing_flap_hz": float(settings.wing_flap_hz)}
     return shot, warnings
 
 

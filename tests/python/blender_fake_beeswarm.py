@@ -6,7 +6,8 @@ read, or write a USDA PointInstancer with exactly known content.
 
 BEESWARM_FAKE_MODE: "ok" (default: bees circling the spawn centre), "fail" (progress, then
 an error on stderr and exit 1), "corrupt" (exit 0, but the cache is not USD or glTF),
-"slow" (progress, then a minute of nothing: for cancelling).
+"slow" (progress, then a minute of nothing: for cancelling), "partial" (writes the tracks
+CSV, then fails: a bake that dies between two outputs).
 """
 import json
 import math
@@ -60,6 +61,9 @@ def main(argv):
                     fh.write(f"{i},{f},{(f - f0) / fps},{pos[0]},{pos[1]},{pos[2]},"
                              f"{vel[0]},{vel[1]},{vel[2]},0,0,0,1,0,0,0\n")
         outputs.append(str(p.resolve()))
+    if mode == "partial":
+        print(f"error: {shot}: out of memory after writing {p.name}", file=sys.stderr)
+        return 1
     for fmt in fmts:
         if fmt == "csv":
             continue

@@ -65,5 +65,7 @@ def read_tracks(path):
         for row in csv.DictReader(f):
             bee = int(row["id"])
             frame = int(row["frame"])
-            tracks.setdefault(bee, {})[frame] = {k: float(v) for k, v in row.items()}
+            # A channel another swarm's model records is empty for this bee: None.
+            tracks.setdefault(bee, {})[frame] = {k: float(v) if v != "" else None
+                                                 for k, v in row.items()}
     return tracks

@@ -18,15 +18,19 @@ import pytest
 
 bpy = pytest.importorskip("bpy", reason="bpy (Blender as a module) is not installed")
 import numpy as np  # noqa: E402  (bpy brings numpy)
-from mathutils import Euler, Vector  # noqa: E402
+from mathutils import Euler, Quaternion, Vector  # noqa: E402
 
 from conftest import ROOT, read_tracks  # noqa: E402
 
 sys.path.insert(0, str(ROOT))
 import blender_addon  # noqa: E402
-from blender_addon import binary, importer, props, runner, shot_builder  # noqa: E402
+from blender_addon import binary, display, importer, props, runner, shot_builder  # noqa: E402
 
 TOL = 1e-4  # metres
+# Blender's name for this machine's platform (extension manifests' `platforms`).
+PLATFORM = {"linux": "linux", "darwin": "macos", "win32": "windows"}.get(sys.platform, sys.platform) \
+    + "-" + {"x86_64": "x64", "amd64": "x64", "aarch64": "arm64", "arm64": "arm64"}.get(
+        __import__("platform").machine().lower(), __import__("platform").machine().lower())
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -50,10 +54,11 @@ def scene(tmp_path):
     s.obstacles = bpy.data.collections["Obstacles"]
     s.targets = bpy.data.collections["Targets"]
     s.shot_name = "bltest"
-    s.count = 40
     s.seed = 1
-    s.spawn_center = (0.0, 0.0, 1.0)
-    s.spawn_size = (0.8, 0.8, 0.8)
+    sw = props.add_swarm(s)
+    sw.count = 40
+    sw.spawn_center = (0.0, 0.0, 1.0)
+    sw.spawn_size = (0.8, 0.8, 0.8)
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
     return sc
 
@@ -184,7 +189,7 @@ def test_targets_and_spawn_from_scene(scene):
     spawn.location = (0.0, 0.0, 1.5)
     spawn.scale = (0.5, 1.0, 0.25)
     scene.collection.objects.link(spawn)
-    scene.beeswarm.spawn_object = spawn
+    scene.beeswarm.swarms[0].spawn_object = spawn
     scene.beeswarm.wind = (1.0, 2.0, 0.0)
     bpy.context.view_layer.update()
     shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
@@ -272,6 +277,288 @@ def test_binary_discovery(tmp_path, monkeypatch):
     assert binary.discover(addon_dir, use_cache=False) == on_path
     assert binary.resolve(str(tmp_path / "missing"))[0] is None
     assert binary.resolve(str(exe))[0] == exe
+    # A binary bundled in the extension (bin/ beside the add-on) comes before PATH; the
+    # installer drops file modes, so it is made executable on first use.
+    packed = addon_dir / "bin" / binary.EXE
+    packed.parent.mkdir()
+    packed.write_text("#!/bin/sh\n")
+    packed.chmod(0o644)
+    assert binary.discover(addon_dir, use_cache=False) == packed
+    assert os.access(packed, os.X_OK)
+    # An explicit path (the operator's or the preference) still wins.
+    assert binary.resolve(str(on_path))[0] == on_path
+
+
+# ---------------------------------------------------------------------------------------
+# The whole shot from the panel: several swarms, overrides, bounds, frames, formats
+
+def test_two_swarms_with_overrides_bounds_and_own_frames(scene, with_binary, tmp_path):
+    s = scene.beeswarm
+    first = s.swarms[0]
+    first.bee_length = 0.015
+    first.size_variation = 0.3
+    first.speed_variation = 0.05
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    first.overrides[0].param = "speed"
+    first.overrides[0].value = 1.5
+    box = add_empty("Roam", (0.0, 0.0, 1.0), collection="Obstacles")
+    bpy.data.collections["Obstacles"].objects.unlink(box)
+    scene.collection.objects.link(box)
+    box.empty_display_type = "CUBE"
+    box.scale = (3.0, 2.0, 1.5)
+    first.bounds_object = box
+    assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+    second = s.swarms[1]
+    assert second.name == "bees_2" and s.swarm_index == 1
+    second.count = 15
+    second.model = "boids"
+    second.spawn_center = (2.0, 0.0, 1.0)
+    s.use_scene_frames = False
+    s.frame_start, s.frame_end = 10, 30
+    bpy.context.view_layer.update()
+    shot, _ = shot_builder.build_shot(scene, s)
+    doc = tomllib.loads(shot_builder.shot_toml(shot))
+    a, b = doc["swarm"]
+    assert (a["name"], a["count"], b["name"], b["count"], b["model"]) == \
+        ("bees", 40, "bees_2", 15, "boids")
+    assert a["params"] == {"speed": 1.5} and "params" not in b
+    assert a["bee"] == pytest.approx({"length": 0.015, "radius": 0.0025})
+    assert a["variation"] == pytest.approx({"size": 0.3, "speed": 0.05})
+    assert a["bounds"] == {"center": pytest.approx([0.0, 1.0, 0.0]),
+                           "size": pytest.approx([6.0, 3.0, 4.0])}
+    assert "bounds" not in b
+    assert doc["scene"]["frames"] == [10, 30]
+    path = tmp_path / "two.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot, "test"))
+    r = subprocess.run([with_binary, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+    assert run_bake(with_binary, "USD") == {"FINISHED"}
+    clouds = sorted(o.name for o in bpy.data.collections["bltest"].all_objects
+                    if o.type == "POINTCLOUD")
+    assert clouds == ["bees", "bees_2"]
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "bltest" / "bltest.tracks.csv")
+    assert len(tracks) == 55 and sorted(next(iter(tracks.values()))) == list(range(10, 31))
+    # The panel's own range is baked; the scene keeps its range.
+    assert (scene.frame_start, scene.frame_end) == (1, 36)
+
+
+def test_swarm_and_override_lists_add_and_remove(scene, with_binary):
+    s = scene.beeswarm
+    for _ in range(2):
+        assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+    assert [w.name for w in s.swarms] == ["bees", "bees_2", "bees_3"] and s.swarm_index == 2
+    s.swarm_index = 1
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    assert bpy.ops.beeswarm.override_add() == {"FINISHED"}
+    first, second = s.swarms[1].overrides
+    # Each starts at another parameter, at the preset's value.
+    assert first.param == "kappa1" and second.param == "kappa2"
+    assert (first.value, second.value) == pytest.approx((1.0, 2.5))  # nest
+    s.swarms[1].override_index = 0
+    assert bpy.ops.beeswarm.override_remove() == {"FINISHED"}
+    assert [o.param for o in s.swarms[1].overrides] == ["kappa2"]
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert [w.name for w in s.swarms] == ["bees", "bees_3"] and s.swarm_index == 1
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert bpy.ops.beeswarm.swarm_remove() == {"FINISHED"}
+    assert not s.swarms and not bpy.ops.beeswarm.swarm_remove.poll()
+    with pytest.raises(shot_builder.ShotBuildError, match="no swarm"):
+        shot_builder.build_shot(scene, s)
+
+
+def test_both_formats_in_one_bake(scene, with_binary, tmp_path):
+    s = scene.beeswarm
+    s.formats = {"USD", "GLTF"}
+    s.format = "GLTF"
+    log = draw_panel(bpy.context)
+    assert ("prop", "format") in log  # which one to import, once both are chosen
+    assert run_bake(with_binary, "GLTF", also_formats={"USD"}) == {"FINISHED"}
+    folder = tmp_path / "beeswarm_cache" / "bltest"
+    assert {"bltest.glb", "bltest.usda", "bltest.tracks.csv"} <= {p.name for p in folder.iterdir()}
+    assert len(gltf_bodies("bltest")) == 40  # the glTF is the one imported
+
+
+def test_unsupported_obstacle_shapes_are_errors_naming_the_objects(scene, beeswarm_bin):
+    egg = add_primitive("uv_sphere", "Obstacles", radius=0.2, location=(1.0, 0.0, 1.0))
+    egg.name = "egg"
+    egg.scale = (1.0, 1.0, 1.6)
+    oval = add_primitive("cylinder", "Obstacles", radius=0.1, depth=1.0, location=(-1.0, 0.0, 0.5))
+    oval.name = "oval_post"
+    oval.scale = (1.0, 2.0, 1.0)
+    parent = bpy.data.objects.new("squash", None)
+    parent.scale = (1.0, 3.0, 1.0)
+    scene.collection.objects.link(parent)
+    leaning = add_primitive("cube", "Obstacles", size=0.2, location=(0.0, 1.0, 0.2),
+                            rotation=(0.0, 0.0, math.radians(30)))
+    leaning.name = "leaning_box"
+    leaning.parent = parent
+    me = bpy.data.meshes.new("rock")
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (0, 2, 0), (0, 0, 0.3), (0.5, 0.5, 0.1)], [], [])
+    bpy.data.collections["Obstacles"].objects.link(bpy.data.objects.new("rock", me))
+    add_primitive("cube", "Obstacles", size=0.2, location=(0.0, -1.0, 0.2))  # fine
+    bpy.context.view_layer.update()
+    with pytest.raises(shot_builder.ShotBuildError) as err:
+        shot_builder.build_shot(scene, scene.beeswarm)
+    msg = str(err.value)
+    for name, why in (("egg", "ellipsoid"), ("oval_post", "elliptic cylinder"),
+                      ("leaning_box", "sheared"), ("rock", "not a sphere, box")):
+        assert f"'{name}'" in msg and why in msg, (name, msg)
+    assert "'Cube'" not in msg
+    with pytest.raises(RuntimeError, match="egg"):
+        bake("USD", beeswarm_bin)
+    assert not shot_collections("bltest")
+
+
+def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
+    """A flat sphere passes the add-on but not the binary: its message names the Blender
+    object beside the shot key."""
+    ball = add_primitive("uv_sphere", "Obstacles", radius=0.2, location=(1.0, 0.0, 1.0))
+    ball.name = "ball"
+    ball.scale = (0.0, 0.0, 0.0)
+    shot_cylinder_scene(scene)
+    bpy.context.view_layer.update()
+    with pytest.raises(RuntimeError) as err:
+        bake("USD", beeswarm_bin)
+    msg = str(err.value)
+    index = [o["name"] for o in shot_builder.build_shot(scene, scene.beeswarm)[0]["obstacle"]]
+    assert f"obstacle[{index.index('ball')}] (Blender object 'ball').radius" in msg, msg
+    assert "bltest.shot.toml:" in msg and "Y-up: its [x, y, z] is Blender's (x, −z, y)" in msg
+    # The failing shot is kept where the message says (Blender's temp folder), not beside
+    # the cache it did not make.
+    kept = pathlib.Path(bpy.app.tempdir) / "beeswarm_failed" / "bltest.shot.toml"
+    assert f"{kept}:" in msg and 'name = "ball"' in kept.read_text()
+    assert not (pathlib.Path(bpy.path.abspath("//beeswarm_cache")) / "bltest").exists()
+    from blender_addon import operators
+    shot = {"swarm": [{"name": "bees"}], "obstacle": [{"name": "post"}]}
+    assert operators.name_blender_objects("key `swarm[0].params.speed`, `obstacle[0].a`, "
+                                          "`obstacle[3].b`", shot) == \
+        "key `swarm[0] (swarm 'bees').params.speed`, `obstacle[0] (Blender object 'post').a`, " \
+        "`obstacle[3].b`"
+
+
+def test_wing_flap_and_its_limit(scene):
+    s = scene.beeswarm
+    s.wing_flap_hz = 6.0
+    shot, _ = shot_builder.build_shot(scene, s)
+    assert tomllib.loads(shot_builder.shot_toml(shot))["output"] == {"wing_flap_hz": 6.0}
+    s.wing_flap_hz = 13.0  # 24 fps: above 12 Hz it would alias
+    with pytest.raises(shot_builder.ShotBuildError, match="above half the frame rate"):
+        shot_builder.build_shot(scene, s)
+
+
+def test_motion_blur_hint_from_the_swarms_speed(scene, with_binary):
+    from blender_addon import panel
+    sw = scene.beeswarm.swarms[0]
+    scene.render.motion_blur_shutter = 0.5
+    doc, _ = props.models_doc(bpy.context)
+    hint = panel.motion_blur_hint(scene, sw, doc)
+    # nest preset: 1 m/s; 0.5 frame at 24 fps: 2.1 cm, 1.7 lengths of a 12 mm bee
+    assert "at 1 m/s a bee smears 2.1 cm, 1.7 body lengths" in hint, hint
+    assert "0.1 gives 0.4 cm" in hint
+    sw.overrides.add().param = "speed"
+    sw.overrides[0].value = 2.0
+    assert "at 2 m/s a bee smears 4.2 cm" in panel.motion_blur_hint(scene, sw, doc)
+    text = " ".join(t for kind, t in draw_panel(bpy.context) if kind == "label")
+    assert "Motion blur" in text and "Shutter" in text
+
+
+def test_undo_restores_the_swarm_before_a_bake(scene, beeswarm_bin):
+    """The bake is one undo step (as a button press makes it; a script asks with undo=True).
+    glTF keeps its animation in the .blend, so undo brings the previous swarm back whole."""
+    shot_cylinder_scene(scene)
+    bpy.ops.ed.undo_push(message="before the first bake")
+
+    def bake_with_undo():
+        return bpy.ops.beeswarm.bake("EXEC_DEFAULT", True, format="GLTF", binary_path=beeswarm_bin)
+    assert bake_with_undo() == {"FINISHED"}
+    first = gltf_positions("bltest", 20)
+    scene.beeswarm.seed = 7
+    assert bake_with_undo() == {"FINISHED"}
+    second = gltf_positions("bltest", 20)
+    assert max((first[b] - second[b]).length for b in first) > 1e-3
+    assert bpy.ops.ed.undo() == {"FINISHED"}  # the second bake
+    assert len(shot_collections("bltest")) == 1
+    back = gltf_positions("bltest", 20)
+    assert max((first[b] - back[b]).length for b in first) < 1e-6
+    assert bpy.context.scene.beeswarm.seed == 1
+    assert bpy.ops.ed.undo() == {"FINISHED"}  # the first bake
+    assert not shot_collections("bltest")
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert len(shot_collections("bltest")) == 1
+
+
+def drawn_instances(ob, frame=None):
+    """{persistent id: DepsgraphObjectInstance matrix, object name} of the prototype roots
+    the viewport depsgraph draws for an instancer."""
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    return {i.persistent_id[1]: (i.matrix_world.copy(), i.object.original.name)
+            for i in dg.object_instances
+            if i.is_instance and i.parent and i.parent.original == ob
+            and i.object.original.parent is None}
+
+
+def test_display_percentage_in_the_viewport_only(scene, beeswarm_bin):
+    s = scene.beeswarm
+    s.swarms[0].count = 200
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    inst = usd_instancer("bltest")
+    assert len(drawn_instances(inst, 5)) == 200
+    s.display_percent = 25
+    drawn = drawn_instances(inst, 5)
+    assert 25 <= len(drawn) <= 75, len(drawn)  # a random quarter of 200
+    assert drawn.keys() == drawn_instances(inst, 20).keys()  # the same bees all along
+    mod = inst.modifiers[display.DISPLAY_MODIFIER]
+    assert mod.show_viewport and not mod.show_render  # renders draw every bee
+    s.display_percent = 100
+    assert len(drawn_instances(inst, 5)) == 200
+    # Points in Viewport: no instances drawn, a point per bee; renders keep the bees.
+    s.viewport_points = True
+    assert not drawn_instances(inst, 5)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(inst.evaluated_get(dg).data.points) == 200
+    s.display_percent = 50
+    assert 60 <= len(inst.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.points) <= 140
+    assert all(m.show_render for m in inst.modifiers if m.name != display.DISPLAY_MODIFIER)
+    s.viewport_points = False
+    s.display_percent = 100
+    assert len(drawn_instances(inst, 5)) == 200
+
+    s.display_percent = 30
+    scene.beeswarm.seed = 3
+    assert run_bake(beeswarm_bin, "GLTF") == {"FINISHED"}  # a new import takes the setting
+    bodies = gltf_bodies("bltest")
+    hidden = {b for b, o in bodies.items() if o.hide_viewport}
+    assert hidden == {b for b in bodies if not display.shown(b, 30)}
+    assert 0 < len(hidden) < len(bodies) and not any(o.hide_render for o in bodies.values())
+
+
+def test_a_scene_object_as_the_insect_asset(scene, beeswarm_bin, tmp_path):
+    """The asset (modelled facing +X, +Z up) is drawn on every bee, turned into the bee's
+    body frame: its +X along the body's forward axis, its +Z along the body's up."""
+    bpy.ops.mesh.primitive_cone_add(radius1=0.003, depth=0.012, location=(5.0, 5.0, 5.0))
+    wasp = bpy.context.active_object
+    wasp.name = "wasp"
+    scene.beeswarm.asset = wasp
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    inst = usd_instancer("bltest")
+    drawn = drawn_instances(inst, 12)
+    assert len(drawn) == 40 and {name for _, name in drawn.values()} == {"wasp"}
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "bltest" / "bltest.tracks.csv")
+    for bee, (m, _) in drawn.items():
+        row = tracks[bee][12]
+        q = Quaternion((row["qw"], row["qx"], row["qy"], row["qz"]))  # body → world, shot axes
+        assert (m.translation - blender_from_shot([row["x"], row["y"], row["z"]])).length < TOL
+        rot = m.to_3x3().normalized()
+        forward = blender_from_shot(q @ Vector((1, 0, 0)))
+        up = blender_from_shot(q @ Vector((0, 1, 0)))
+        assert (rot @ Vector((1, 0, 0)) - forward).length < 1e-3, bee
+        assert (rot @ Vector((0, 0, 1)) - up).length < 1e-3, bee
+    # glTF keeps its own bees, and says so.
+    r = bake("GLTF", beeswarm_bin)
+    assert r == {"FINISHED"} and gltf_bodies("bltest")
 
 
 # ---------------------------------------------------------------------------------------
@@ -290,7 +577,7 @@ def names(items):
 
 
 def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
-    s = scene.beeswarm
+    s = scene.beeswarm.swarms[0]
     assert names(props.model_items(s, bpy.context)) == ["bee", "curl", "brownian", "boids"]
     expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
                                          text=True, check=True).stdout)
@@ -310,10 +597,10 @@ def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
 
 def test_a_curl_swarm_built_from_the_scene_passes_check_and_bakes(scene, with_binary, tmp_path):
     shot_cylinder_scene(scene)
-    s = scene.beeswarm
+    s = scene.beeswarm.swarms[0]
     s.model = "curl"
     assert s.preset == "default"
-    shot, _ = shot_builder.build_shot(scene, s)
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
     assert (shot["swarm"][0]["model"], shot["swarm"][0]["preset"]) == ("curl", "default")
     path = tmp_path / "curl.shot.toml"
     path.write_text(shot_builder.shot_toml(shot, "test"))
@@ -327,7 +614,7 @@ def test_a_curl_swarm_built_from_the_scene_passes_check_and_bakes(scene, with_bi
 def test_model_menu_falls_back_to_the_bee_model_and_says_why(scene, tmp_path, monkeypatch):
     monkeypatch.setattr(binary, "_models_cache", {})
     doc, reason = binary.models(str(tmp_path / "missing" / "beeswarm"))
-    assert names(props.model_items(scene.beeswarm, bpy.context)) and doc is binary.FALLBACK_MODELS
+    assert names(props.model_items(scene.beeswarm.swarms[0], bpy.context)) and doc is binary.FALLBACK_MODELS
     assert "No beeswarm binary" in reason
     # A binary without the `models` subcommand (an older build): the bee model, and why.
     old = tmp_path / "old" / binary.EXE
@@ -368,7 +655,7 @@ def test_missing_binary_reports_and_imports_nothing(scene, tmp_path):
 
 def test_count_zero_is_an_error(scene, beeswarm_bin):
     shot_cylinder_scene(scene)
-    scene.beeswarm.count = 0
+    scene.beeswarm.swarms[0].count = 0
     with pytest.raises(RuntimeError, match="at least 1 bee"):
         bake("USD", beeswarm_bin)
     assert not shot_collections("bltest")
@@ -421,29 +708,70 @@ def usd_instancer(name):
     return pcs[0]
 
 
-def usd_instances(name, frame):
-    """{bee id: (Blender world position, instance velocity attr)} at a frame."""
-    sc = bpy.context.scene
-    sc.frame_set(frame)
-    dg = bpy.context.evaluated_depsgraph_get()
-    inst = usd_instancer(name)
-    geometry_set = inst.evaluated_get(dg).evaluated_geometry()  # keeps geo alive
-    geo = geometry_set.instances_pointcloud()
+# Blender 4.4 (the oldest the manifest claims) has no Python access to instance attributes
+# (Object.evaluated_geometry() is newer). There a last, temporary modifier turns the
+# instances into points (Instances to Points carries their attributes over) whose evaluated
+# point cloud Python can read.
+HAS_GEOMETRY_SET = hasattr(bpy.types.Object, "evaluated_geometry")
+PROBE_MODIFIER = "beeswarm test: instances to points"
+
+
+def expose_instances(obs):
+    if HAS_GEOMETRY_SET:
+        return
+    ng = bpy.data.node_groups.get(PROBE_MODIFIER)
+    if ng is None:
+        ng = bpy.data.node_groups.new(PROBE_MODIFIER, "GeometryNodeTree")
+        ng.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        ng.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+        gin, gout = ng.nodes.new("NodeGroupInput"), ng.nodes.new("NodeGroupOutput")
+        to_points = ng.nodes.new("GeometryNodeInstancesToPoints")
+        ng.links.new(gin.outputs[0], to_points.inputs["Instances"])
+        ng.links.new(to_points.outputs["Points"], gout.inputs[0])
+    for ob in obs:
+        if PROBE_MODIFIER not in ob.modifiers:
+            ob.modifiers.new(PROBE_MODIFIER, "NODES").node_group = ng
+
+
+def read_instances(ob_eval, depsgraph):
+    """(ids, velocities [n, 3], {id: Blender world position}) of an evaluated instancer
+    (after expose_instances)."""
+    if HAS_GEOMETRY_SET:
+        geometry_set = ob_eval.evaluated_geometry()  # keeps the geometry alive
+        geo = geometry_set.instances_pointcloud()
+    else:
+        geo = ob_eval.data
     n = len(geo.points)
     ids = np.zeros(n, np.int32)
     geo.attributes["id"].data.foreach_get("value", ids)
     vel = np.zeros(n * 3, np.float32)
     geo.attributes["velocity"].data.foreach_get("vector", vel)
-    vel = vel.reshape(n, 3)
-    # Instance positions from the depsgraph (the instances' own "position" attribute is a
-    # virtual one that reads back unreliably): the prototype's root object (no parent) once
-    # per instance. Its persistent id is the instance's `id` attribute: the bee's id.
     positions = {}
-    for i in dg.object_instances:
-        if i.is_instance and i.parent and i.parent.original == inst and \
-                i.object.original.parent is None:
-            positions[i.persistent_id[1]] = i.matrix_world.translation.copy()
+    if HAS_GEOMETRY_SET:
+        # From the depsgraph (the instances' own "position" attribute is a virtual one that
+        # reads back unreliably): the prototype's root object (no parent) once per
+        # instance. Its persistent id is the instance's `id` attribute: the bee's id.
+        for i in depsgraph.object_instances:
+            if i.is_instance and i.parent and i.parent.original == ob_eval.original and \
+                    i.object.original.parent is None:
+                positions[i.persistent_id[1]] = i.matrix_world.translation.copy()
+    else:
+        pos = np.zeros(n * 3, np.float32)
+        geo.attributes["position"].data.foreach_get("vector", pos)
+        for bee, p in zip(ids, pos.reshape(n, 3)):
+            positions[int(bee)] = ob_eval.matrix_world @ Vector(p)
     assert sorted(positions) == sorted(int(b) for b in ids)
+    return ids, vel.reshape(n, 3), positions
+
+
+def usd_instances(name, frame):
+    """{bee id: (Blender world position, instance velocity attr)} at a frame."""
+    inst = usd_instancer(name)
+    expose_instances([inst])
+    sc = bpy.context.scene
+    sc.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    ids, vel, positions = read_instances(inst.evaluated_get(dg), dg)
     return {int(b): (positions[int(b)], v) for b, v in zip(ids, vel)}
 
 
@@ -476,9 +804,10 @@ def test_usd_bake_imports_the_swarm_once_and_rebakes_in_place(scene, beeswarm_bi
     t0 = time.monotonic()
     assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
     print(f"USD bake + import: {time.monotonic() - t0:.2f} s")
-    assert (tmp_path / "bltest.shot.toml").is_file()
     cache_dir = tmp_path / "beeswarm_cache" / "bltest"
-    assert (cache_dir / "bltest.usda").is_file()
+    assert (cache_dir / "bltest.shot.toml").is_file() and (cache_dir / "bltest.usda").is_file()
+    assert not (tmp_path / "bltest.shot.toml").exists()
+    assert sorted(p.name for p in cache_dir.parent.iterdir()) == ["bltest"]  # no staging left
     assert len(shot_collections("bltest")) == 1 and "bltest" in bpy.data.collections
     assert (scene.render.fps, scene.render.fps_base) == (30, 1.0)
     assert (scene.frame_start, scene.frame_end) == (5, 40)
@@ -577,6 +906,10 @@ class RecordingLayout:
         assert prop in data.bl_rna.properties, prop
         self.log.append(("prop", prop))
 
+    def template_list(self, list_type, list_id, data, prop, active_data, active_prop, **kw):
+        assert prop in data.bl_rna.properties and active_prop in active_data.bl_rna.properties
+        self.log.append(("list", list_type))
+
     def operator(self, idname, **kw):
         self.log.append(("operator", idname))
 
@@ -599,7 +932,7 @@ def test_panel_draws_settings_and_says_when_no_binary(scene, monkeypatch, beeswa
     text = " ".join(t for kind, t in log if kind == "label")
     assert "No beeswarm binary found" in text
     props_shown = {t for kind, t in log if kind == "prop"}
-    assert {"count", "preset", "seed", "obstacles", "targets", "format"} <= props_shown
+    assert {"count", "preset", "seed", "obstacles", "targets", "formats"} <= props_shown
     assert ("operator", "beeswarm.bake") in log
     monkeypatch.setattr(binary, "discover", lambda *a, **k: pathlib.Path(beeswarm_bin))
     scene.beeswarm.source = "FILE"
@@ -621,7 +954,8 @@ def test_manifest_validates_with_blenders_extension_tool():
     assert r.returncode == 0, r.stdout + r.stderr
     manifest = tomllib.loads((ROOT / "blender_addon" / "blender_manifest.toml").read_text())
     assert manifest["id"] == "beeswarm" and manifest["schema_version"] == "1.0.0"
-    assert manifest["blender_version_min"] == "4.2.0"
+    # 4.4: Blender 4.2 and 4.3 import a PointInstancer without its animation (docs/blender.md).
+    assert manifest["blender_version_min"] == "4.4.0"
 
 
 ENABLE_AS_EXTENSION = r'''
@@ -646,6 +980,77 @@ def test_enables_as_an_extension_and_reads_its_preference(tmp_path):
         env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res")})
     assert r.returncode == 0, r.stdout + r.stderr
     assert f"REPORTED: Error: No beeswarm binary at {missing}" in r.stdout
+
+
+INSTALL_ZIP_AND_BAKE = r'''
+import os, pathlib, shutil, sys, bpy
+zip_path, workdir = sys.argv[-2:]
+assert shutil.which("beeswarm") is None, "the test needs a PATH without beeswarm"
+assert bpy.ops.extensions.package_install_files(
+    filepath=zip_path, repo="user_default", enable_on_install=True) == {"FINISHED"}
+module = "bl_ext.user_default.beeswarm"
+assert module in bpy.context.preferences.addons, list(bpy.context.preferences.addons.keys())
+binary = sys.modules[module + ".binary"]
+print("BINARY:", binary.resolve("")[0])
+sc = bpy.context.scene
+sc.frame_start, sc.frame_end = 1, 12
+sc.beeswarm.shot_name = "installed"
+assert bpy.ops.beeswarm.swarm_add() == {"FINISHED"}
+sc.beeswarm.swarms[0].count = 20
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(workdir, "scene.blend"))
+assert bpy.ops.beeswarm.bake(format="USD") == {"FINISHED"}
+sc.frame_set(6)
+dg = bpy.context.evaluated_depsgraph_get()
+clouds = [o for o in bpy.data.collections["installed"].all_objects if o.type == "POINTCLOUD"]
+# One prototype root (no parent) per drawn bee.
+print("POINTS:", [len({tuple(i.persistent_id) for i in dg.object_instances
+                       if i.is_instance and i.parent and i.parent.original == o
+                       and i.object.original.parent is None}) for o in clouds])
+print("MESSAGE:", sc.beeswarm.last_message)
+'''
+
+
+@pytest.fixture(scope="module")
+def extension_zip(beeswarm_bin, tmp_path_factory):
+    """The extension zip scripts/build-extension makes from the binary under test, packed
+    with this bpy's own extension tool."""
+    out = tmp_path_factory.mktemp("extension")
+    r = subprocess.run([str(ROOT / "scripts" / "build-extension"), "--binary", beeswarm_bin,
+                        "--out", str(out)], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "BEESWARM_BPY_PYTHON": sys.executable, "BLENDER": ""})
+    assert r.returncode == 0, r.stdout + r.stderr
+    zips = list(out.glob("*.zip"))
+    assert [z.name for z in zips] == [r.stdout.strip().splitlines()[-1].rsplit("/", 1)[-1]]
+    return zips[0]
+
+
+def test_extension_zip_holds_the_binary_for_this_platform(extension_zip):
+    import zipfile
+    with zipfile.ZipFile(extension_zip) as z:
+        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        names = set(z.namelist())
+    assert manifest["platforms"] == [PLATFORM] and extension_zip.name.endswith(
+        PLATFORM.replace("-", "_") + ".zip")
+    assert f"bin/{binary.EXE}" in names and "__init__.py" in names
+    assert not [n for n in names if "__pycache__" in n]
+
+
+def test_installed_zip_bakes_with_its_bundled_binary(extension_zip, tmp_path):
+    """Install from Disk, as a user would (extensions.package_install_files), in a Blender
+    whose PATH has no beeswarm: the first bake works with the binary inside the zip."""
+    work = tmp_path / "work"
+    work.mkdir()
+    r = subprocess.run(
+        [sys.executable, "-c", INSTALL_ZIP_AND_BAKE, str(extension_zip), str(work)],
+        capture_output=True, text=True, timeout=300,
+        env={**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "res"),
+             "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    installed = tmp_path / "res" / "extensions" / "user_default" / "beeswarm" / "bin" / binary.EXE
+    assert f"BINARY: {installed}" in r.stdout, r.stdout
+    assert "POINTS: [20]" in r.stdout, r.stdout + r.stderr
+    assert "MESSAGE: Baked installed" in r.stdout
+    assert (work / "beeswarm_cache" / "installed" / "installed.usda").is_file()
 
 
 # ---------------------------------------------------------------------------------------
@@ -698,19 +1103,8 @@ class ProbeEngine(bpy.types.RenderEngine):
     def _look(self, depsgraph, key):
         for ob in depsgraph.objects:
             if ob.type == "POINTCLOUD":
-                gs = ob.evaluated_geometry()
-                ip = gs.instances_pointcloud()
-                n = len(ip.points)
-                v = np.zeros(n * 3, np.float32)
-                ip.attributes["velocity"].data.foreach_get("vector", v)
-                ids = np.zeros(n, np.int32)
-                ip.attributes["id"].data.foreach_get("value", ids)
-                # The prototype's root object, once per bee, by persistent id (= bee id).
-                pos = {i.persistent_id[1]: tuple(i.matrix_world.translation)
-                       for i in depsgraph.object_instances
-                       if i.is_instance and i.parent and i.parent.name == ob.name
-                       and i.object.original.parent is None}
-                ProbeEngine.seen[key] = (ids, v.reshape(n, 3), pos)
+                ids, v, pos = read_instances(ob, depsgraph)
+                ProbeEngine.seen[key] = (ids, v, {b: tuple(p) for b, p in pos.items()})
 
     def render(self, depsgraph):
         f = depsgraph.scene.frame_current
@@ -723,12 +1117,14 @@ class ProbeEngine(bpy.types.RenderEngine):
 
 
 def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
-    scene.beeswarm.count = 12
+    scene.beeswarm.swarms[0].count = 12
     assert bake("USD", fake_bin) == {"FINISHED"}
     tracks = read_tracks(pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.tracks.csv")))
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
     scene.collection.objects.link(cam)
     scene.camera = cam
+    expose_instances([o for o in bpy.data.collections["bltest"].all_objects
+                      if o.type == "POINTCLOUD"])
     bpy.utils.register_class(ProbeEngine)
     try:
         scene.render.engine = ProbeEngine.bl_idname
@@ -751,7 +1147,8 @@ def test_render_depsgraph_has_ids_and_velocities_at_subframes(scene, fake_bin):
 
 
 def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path):
-    mine = tmp_path / "bltest.shot.toml"
+    mine = tmp_path / "beeswarm_cache" / "bltest" / "bltest.shot.toml"
+    mine.parent.mkdir(parents=True)
     mine.write_text("# my hand-made shot\n[scene]\nname = \"bltest\"\n")
     with pytest.raises(RuntimeError, match="not written by the add-on"):
         bake("USD", fake_bin)
@@ -760,6 +1157,50 @@ def test_never_overwrites_a_shot_file_it_did_not_write(scene, fake_bin, tmp_path
     assert bake("USD", fake_bin) == {"FINISHED"}
     assert bake("USD", fake_bin) == {"FINISHED"}  # its own file: rewritten
     assert mine.read_text().startswith(shot_builder.HEADER_MARK)
+
+
+def cache_state(folder):
+    """{file name: bytes} of a cache folder and whatever sits beside it."""
+    return {str(p.relative_to(folder.parent)): p.read_bytes()
+            for p in sorted(folder.parent.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("mode", ["fail", "partial"])
+def test_failed_bake_leaves_the_shot_and_the_cache_as_they_were(scene, fake_bin, tmp_path,
+                                                                monkeypatch, mode):
+    """The shot TOML lives in the cache folder and is replaced with the cache, only when a
+    bake succeeds: a failing bake (even one that wrote an output first) changes neither."""
+    shot_cylinder_scene(scene)
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    folder = tmp_path / "beeswarm_cache" / "bltest"
+    before = cache_state(folder)
+    assert "count = 40" in (folder / "bltest.shot.toml").read_text()
+    scene.beeswarm.swarms[0].count = 900
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", mode)
+    with pytest.raises(RuntimeError, match="Bake failed"):
+        bake("USD", fake_bin)
+    assert cache_state(folder) == before
+    monkeypatch.setenv("BEESWARM_FAKE_MODE", "ok")
+    scene.beeswarm.swarms[0].count = 12
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    assert "count = 12" in (folder / "bltest.shot.toml").read_text()
+    assert len(read_tracks(folder / "bltest.tracks.csv")) == 12
+
+
+def test_unsaved_file_bakes_into_blenders_temp_directory(fake_bin, tmp_path):
+    """An unsaved file has no folder: its shot and cache go to a folder in Blender's own
+    temporary directory for this session, not a /tmp folder every Blender shares."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    assert not bpy.data.filepath
+    sc = bpy.context.scene
+    sc.frame_start, sc.frame_end = 1, 12
+    sc.beeswarm.shot_name = "unsaved"
+    props.add_swarm(sc.beeswarm).count = 5
+    assert bake("USD", fake_bin) == {"FINISHED"}
+    folder = pathlib.Path(bpy.app.tempdir) / "beeswarm_unsaved" / "beeswarm_cache" / "unsaved"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "unsaved.bees.velocity.npy", "unsaved.shot.toml", "unsaved.tracks.csv", "unsaved.usda"]
+    assert str(folder / "unsaved.usda") in sc.beeswarm.last_message
 
 
 # ---------------------------------------------------------------------------------------
@@ -813,7 +1254,8 @@ def modal_operator(job):
 
 def start_modal(context, binary_path, fmt="USD", shot_path=""):
     from blender_addon import operators
-    props = type("Props", (), {"format": fmt, "binary_path": binary_path, "shot_path": shot_path})()
+    props = type("Props", (), {"format": fmt, "binary_path": binary_path, "shot_path": shot_path,
+                               "also_formats": set()})()
     job = operators.Job(context, props)
     job.start()
     operators._active["job"] = job
@@ -854,7 +1296,7 @@ def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch
     assert bake("USD", fake_bin) == {"FINISHED"}
     before = sorted(o.name for o in bpy.data.objects if o.get(importer.SHOT_TAG) == "bltest")
     cache = pathlib.Path(bpy.path.abspath("//beeswarm_cache/bltest/bltest.usda"))
-    cached = cache.read_bytes()
+    before_files = cache_state(cache.parent)
     monkeypatch.setenv("BEESWARM_FAKE_MODE", "slow")
     scene.beeswarm.seed = 4
     wm, ws = FakeWM(), FakeWorkspace()
@@ -871,7 +1313,7 @@ def test_esc_cancels_the_modal_bake_imports_nothing(scene, fake_bin, monkeypatch
     assert operators._active["job"] is None and wm.progress[-1] == "end"
     assert reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
     previous_swarm_intact("bltest", before)
-    assert cache.read_bytes() == cached
+    assert cache_state(cache.parent) == before_files  # the shot (seed 1) and the cache
 
 
 TWO_SWARMS = """
@@ -911,19 +1353,14 @@ def test_shot_file_with_two_swarms(scene, beeswarm_bin, tmp_path):
     coll = bpy.data.collections["two"]
     instancers = {o.name: o for o in coll.all_objects if o.type == "POINTCLOUD"}
     assert sorted(instancers) == ["far", "near"]
+    expose_instances(instancers.values())
     scene.frame_set(12)
     dg = bpy.context.evaluated_depsgraph_get()
     seen = {}
     for name, ob in instancers.items():
-        gs = ob.evaluated_get(dg).evaluated_geometry()
-        ip = gs.instances_pointcloud()
-        n = len(ip.points)
-        ids = np.zeros(n, np.int32)
-        ip.attributes["id"].data.foreach_get("value", ids)
-        vel = np.zeros(n * 3, np.float32)
-        ip.attributes["velocity"].data.foreach_get("vector", vel)
-        seen[name] = n
-        for bee, v in zip(ids, vel.reshape(n, 3)):
+        ids, vel, _ = read_instances(ob.evaluated_get(dg), dg)
+        seen[name] = len(ids)
+        for bee, v in zip(ids, vel):
             row = tracks[int(bee)][12]
             assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
     assert seen == {"near": 15, "far": 25}
