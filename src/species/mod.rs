@@ -122,8 +122,9 @@ pub enum Drive {
     /// The simulated attitude (the body part): rotation heading⁻¹·orientation,
     /// translation (0, 0, lateral offset), the agent's scale. Sits at the agent's centre.
     Attitude,
-    /// A wing flapping at the output's visible flap rate about the part's X axis (the
-    /// hinge line), tip up positive; the right wing's tip points +Z.
+    /// A wing drawn as the output's wing display says (`export::wings`: still, a blurred
+    /// fan, or a visible flap) about the part's X axis (the hinge line), tip up positive;
+    /// the right wing's tip points +Z.
     Flap { right: bool },
     /// Rotation about `axis` (part frame) by the channel's value in degrees.
     Channel { channel: &'static str, axis: Vec3 },

@@ -469,7 +469,8 @@ struct AgentPart {
 }
 
 /// The agent layout of a species for a wing display; `Err(part)` names a moving part whose
-/// merged parent is turned at rest (a rotation track would replace that turn).
+/// merged parent is turned at rest (a rotation track would replace that turn), or an
+/// attitude part under a moving one.
 fn agent_parts(
     sp: &Species,
     display: WingDisplay,
@@ -481,6 +482,8 @@ fn agent_parts(
         let (pr, pt) = match parent {
             None => (Quat::IDENTITY, Vec3::ZERO),
             Some(p) if p.merged => (p.rotation, p.translation),
+            // The attitude part holds the agent's pose: it cannot hang off a moving part.
+            Some(_) if part.drive == Drive::Attitude => return Err(part.name),
             Some(_) => {
                 out.push(AgentPart {
                     merged: false,

@@ -1140,6 +1140,66 @@ fn an_articulated_species_animates_its_channel_driven_parts() {
 }
 
 #[test]
+fn agent_layout_gives_channel_driven_parts_their_own_animated_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = meta(&[("moths", 2, 0.03)], 1, 10);
+    m.swarms[0].species = &articulated::MOTH;
+    m.swarms[0].channels = articulated::CHANNELS.to_vec();
+    let path = dir.path().join("moths.glb");
+    let mut w: Box<dyn CacheWriter> = Box::new(
+        GltfWriter::create(
+            Container::Glb,
+            &path,
+            &m,
+            &layout_opts(0.0, GltfLayout::Agent),
+        )
+        .unwrap(),
+    );
+    for f in m.frame_start..=m.frame_end {
+        let swarms = moth_frames(&m, f);
+        w.write_frame(&Frame {
+            frame: f,
+            time: 0.0,
+            swarms: &swarms,
+        })
+        .unwrap();
+    }
+    crate::atomic::commit_all(w.finish().unwrap()).unwrap();
+    let doc = read(&path);
+    let ids = moth_frames(&m, 1)[0].ids.clone();
+    let name = agent_name(&articulated::MOTH, ids[0]);
+    let agent = &doc.root.nodes[doc.node(&name).value()];
+    // The thorax (the attitude) is the agent node's mesh; the moving parts hang off it at
+    // their offsets.
+    assert_eq!(
+        doc.root.meshes[agent.mesh.unwrap().value()].name.as_deref(),
+        Some("moth_30mm")
+    );
+    let kids: Vec<String> = agent
+        .children
+        .clone()
+        .unwrap()
+        .iter()
+        .map(|k| doc.root.nodes[k.value()].name.clone().unwrap())
+        .collect();
+    assert_eq!(
+        kids,
+        ["wing_l", "wing_r", "abdomen"].map(|p| format!("{name}_{p}"))
+    );
+    let abdomen = doc.node(&format!("{name}_abdomen"));
+    let q = doc.quats(doc.track(abdomen, Property::Rotation).unwrap().1);
+    for (k, f) in (m.frame_start..=m.frame_end).enumerate() {
+        let deg = moth_frames(&m, f)[0].channels[1][0];
+        assert!(q[k].dot(channel_rotation(Vec3::Z, deg)).abs() > 1.0 - 1e-6);
+    }
+    if let Some(report) = validator_report(&path) {
+        assert_eq!(report["issues"]["numErrors"], 0, "{report:#}");
+        assert_eq!(report["issues"]["numWarnings"], 0, "{report:#}");
+        assert_eq!(report["issues"]["numInfos"], 0, "{report:#}");
+    }
+}
+
+#[test]
 fn a_part_driven_by_a_channel_the_model_does_not_record_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let mut m = meta(&[("moths", 1, 0.03)], 1, 2);
