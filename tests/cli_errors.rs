@@ -823,6 +823,41 @@ fn wing_flap_above_half_the_frame_rate() {
 }
 
 #[test]
+fn wing_display_and_gltf_layout_must_be_known_names() {
+    let err = refuse("[scene]\nfps = 30\n[[swarm]]\ncount = 3\n[output]\nwings = \"fast\"\n");
+    assert_says(
+        &err,
+        &[
+            "key `output.wings`",
+            "expected one of \"still\", \"blur\", \"flap\", found \"fast\"",
+        ],
+    );
+    let err = refuse("[scene]\nfps = 30\n[[swarm]]\ncount = 3\n[output]\ngltf_layout = \"flat\"\n");
+    assert_says(
+        &err,
+        &[
+            "key `output.gltf_layout`",
+            "expected one of \"parts\", \"agent\", found \"flat\"",
+        ],
+    );
+}
+
+#[test]
+fn a_flap_rate_with_wings_that_do_not_flap_is_refused() {
+    let err = refuse(
+        "[scene]\nfps = 30\n[[swarm]]\ncount = 3\n[output]\nwings = \"still\"\nwing_flap_hz = 5\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:7:16:",
+            "key `output.wing_flap_hz`",
+            "only applies to wings = \"flap\"",
+        ],
+    );
+}
+
+#[test]
 fn eval_names_an_empty_path_in_a_pooled_list() {
     let dir = TempDir::new().unwrap();
     let run = beeswarm(

@@ -8,12 +8,13 @@ pub mod csv;
 pub mod gltf;
 pub mod preview;
 pub mod usda;
+pub mod wings;
 
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
 use std::path::Path;
 
-pub use crate::shot::{Format, OutputOptions};
+pub use crate::shot::{Format, GltfLayout, OutputOptions};
 
 /// A writer that receives every recorded frame in order, then is finished.
 pub trait CacheWriter: Send {
@@ -104,6 +105,7 @@ pub fn open_writer(
             meta,
             opts.usda_clip_frames
                 .unwrap_or_else(|| usda::auto_clip_frames(meta)),
+            opts.wings,
         )?)),
     }
 }

@@ -32,10 +32,11 @@
 mod text;
 
 use super::CacheWriter;
+use super::wings::{self, WingDisplay};
 use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame, SwarmFrame, SwarmMeta};
-use crate::species::{PolyMesh, ProxyMesh};
+use crate::species::{Alpha, Drive, Primitive, Species};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -351,7 +352,8 @@ pub struct UsdaWriter {
     scales: Vec<Vec<f32>>,
     radius: Vec<f32>,
     /// Per swarm: the prototype geometry of its species, one mesh per part.
-    proxies: Vec<Vec<ProxyMesh>>,
+    protos: Vec<Vec<ProtoPart>>,
+    wings: WingDisplay,
     /// Per swarm: the index of its first attribute's spill in a chunk.
     first_spill: Vec<usize>,
     pieces: Vec<Piece>,
@@ -366,29 +368,23 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 }
 
 impl UsdaWriter {
-    pub fn create(path: &Path, meta: &CacheMeta, clip_frames: u32) -> Result<Self> {
+    pub fn create(
+        path: &Path,
+        meta: &CacheMeta,
+        clip_frames: u32,
+        wings: WingDisplay,
+    ) -> Result<Self> {
         let dir = path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or(Path::new("."))
             .to_path_buf();
-        let proxies: Vec<Vec<ProxyMesh>> = meta
+        let protos: Vec<Vec<ProtoPart>> = meta
             .swarms
             .iter()
-            .map(|s| (s.species.proxies)(s.body_length_m))
+            .map(|s| proto_parts(s.species, s.body_length_m, wings))
             .collect();
-        for (s, p) in meta.swarms.iter().zip(&proxies) {
-            assert_eq!(
-                p.len(),
-                s.species.parts.len(),
-                "species {}: one prototype mesh per part",
-                s.species.name
-            );
-        }
-        let radius = proxies
-            .iter()
-            .map(|p| crate::species::bound_radius(p))
-            .collect();
+        let radius = protos.iter().map(|p| bound_radius(p)).collect();
         let mut first_spill = Vec::new();
         let mut spills = 0;
         for s in &meta.swarms {
@@ -414,7 +410,8 @@ impl UsdaWriter {
             ids: Vec::new(),
             scales: Vec::new(),
             radius,
-            proxies,
+            protos,
+            wings,
             first_spill,
             pieces: Vec::new(),
             half: HalfFormatter::new(),
@@ -657,8 +654,14 @@ impl UsdaWriter {
             t.extend_from_slice(ib.format(*id as i64).as_bytes());
         }
         t.extend_from_slice(b"]\n        int[] protoIndices = [");
-        for i in 0..m.count {
-            t.extend_from_slice(if i > 0 { b", 0" } else { b"0" });
+        let phased = self.phased(swarm);
+        for (i, &id) in self.ids[swarm].iter().enumerate() {
+            if i > 0 {
+                t.extend_from_slice(b", ");
+            }
+            // Flapping: the prototype of the bee's phase group, as in glTF.
+            let index = if phased { wings::group(id) } else { 0 };
+            t.extend_from_slice(ib.format(index).as_bytes());
         }
         t.extend_from_slice(b"]\n");
         // Uniform scales, constant through the shot: formatted like a time sample.
@@ -684,32 +687,154 @@ impl UsdaWriter {
         t.extend_from_slice(b"        float3[] scales = [");
         t.extend_from_slice(&scales.text);
         t.extend_from_slice(b"]\n");
+        let targets: Vec<String> = self
+            .proto_names(swarm)
+            .iter()
+            .map(|p| format!("</{}/{}/Prototypes/{p}>", self.root, m.name))
+            .collect();
         let _ = writeln!(
             Wrap(&mut t),
-            "        rel prototypes = </{}/{}/Prototypes/{}>",
-            self.root,
-            m.name,
-            m.species.name
+            "        rel prototypes = {}",
+            if targets.len() == 1 {
+                targets[0].clone()
+            } else {
+                format!("[{}]", targets.join(", "))
+            }
         );
         out.write_all(&t).map_err(io(path))
     }
 
-    /// The prototype subtree of one instancer: `Prototypes/<species>/<part>`.
-    fn prototypes(&self, swarm: usize) -> String {
-        let sp = self.meta.swarms[swarm].species;
-        let mut s = String::new();
-        let _ = write!(
-            s,
-            "\n        def Scope \"Prototypes\"\n        {{\n            def Xform \"{}\"\n            {{\n",
-            sp.name
-        );
-        for (k, (part, proxy)) in sp.parts.iter().zip(&self.proxies[swarm]).enumerate() {
-            if k > 0 {
-                s.push('\n');
-            }
-            mesh_text(&mut s, part.name, proxy);
+    /// Whether a swarm's wings flap: then it has one prototype per phase group.
+    fn phased(&self, swarm: usize) -> bool {
+        self.wings.flap_hz() > 0.0 && self.protos[swarm].iter().any(|p| p.flap.is_some())
+    }
+
+    /// The prototype names of a swarm: `<species>`, or `<species>_<group>` per phase group.
+    fn proto_names(&self, swarm: usize) -> Vec<String> {
+        let sp = self.meta.swarms[swarm].species.name;
+        if self.phased(swarm) {
+            (0..wings::PHASES).map(|g| format!("{sp}_{g}")).collect()
+        } else {
+            vec![sp.to_owned()]
         }
-        s.push_str("            }\n        }\n");
+    }
+
+    /// The prototype subtree of one instancer: `Prototypes/<species>[_<group>]/<part>`.
+    fn prototypes(&self, swarm: usize) -> String {
+        let mut s = String::from("\n        def Scope \"Prototypes\"\n        {\n");
+        let names = self.proto_names(swarm);
+        for (g, name) in names.iter().enumerate() {
+            if g > 0 {
+                // The other phase groups reference the first one's geometry and override
+                // only their wings' turn samples: the meshes are written once.
+                let _ = write!(
+                    s,
+                    "\n            def Xform \"{name}\" (\n                prepend references = </{}/{}/Prototypes/{}>\n            )\n            {{\n",
+                    self.root, self.meta.swarms[swarm].name, names[0]
+                );
+                let mut first = true;
+                for part in &self.protos[swarm] {
+                    if let Turn::Sampled(samples) = self.wing_turn(part, Some(g)) {
+                        if !first {
+                            s.push('\n');
+                        }
+                        first = false;
+                        let _ = write!(
+                            s,
+                            "                over \"{}\"\n                {{\n",
+                            part.name
+                        );
+                        turn_samples(&mut s, "                    ", &samples);
+                        s.push_str("                }\n");
+                    }
+                }
+                s.push_str("            }\n");
+                continue;
+            }
+            let _ = write!(s, "            def Xform \"{name}\"\n            {{\n");
+            for (k, part) in self.protos[swarm].iter().enumerate() {
+                if k > 0 {
+                    s.push('\n');
+                }
+                let flap = self.phased(swarm).then_some(g);
+                mesh_text(&mut s, &self.looks_path(), part, self.wing_turn(part, flap));
+            }
+            s.push_str("            }\n");
+        }
+        s.push_str("        }\n");
+        s
+    }
+
+    /// `/<root>/Looks`, where every material of the shot is.
+    fn looks_path(&self) -> String {
+        format!("/{}/Looks", self.root)
+    }
+
+    /// A part's turn about its hinge (degrees about X): none, a still angle, or one sample
+    /// per frame for phase group `flap`.
+    fn wing_turn(&self, part: &ProtoPart, flap: Option<usize>) -> Turn {
+        let Some(right) = part.flap else {
+            return Turn::None;
+        };
+        match (self.wings, flap) {
+            (WingDisplay::Flap { hz }, Some(g)) => {
+                let m = &self.meta;
+                let samples = (m.frame_start..=m.frame_end)
+                    .map(|f| {
+                        let t = (f - m.frame_start) as f64 / m.fps;
+                        (f, wings::turn_deg(wings::angle(hz, t, g), right))
+                    })
+                    .collect();
+                Turn::Sampled(samples)
+            }
+            (display, _) => match wings::rest_up_deg(display, 0) {
+                0.0 => Turn::None,
+                up => Turn::Still(wings::turn_deg(up, right)),
+            },
+        }
+    }
+
+    /// The `Looks` scope: one `UsdPreviewSurface` material per material of the species in
+    /// the shot (shared by every swarm), bound by the prototype meshes.
+    fn looks(&self) -> String {
+        let mut done: Vec<&str> = Vec::new();
+        let mut s = String::from("    def Scope \"Looks\"\n    {\n");
+        for sw in &self.meta.swarms {
+            for mat in sw.species.materials {
+                if done.contains(&mat.name) {
+                    continue;
+                }
+                if !done.is_empty() {
+                    s.push('\n');
+                }
+                done.push(mat.name);
+                let path = format!("{}/{}", self.looks_path(), mat.name);
+                let opacity = match mat.alpha {
+                    Alpha::Opaque => 1.0,
+                    Alpha::Membrane => wings::alpha(self.wings),
+                };
+                let [r, g, b] = mat.rgb;
+                let _ = write!(
+                    s,
+                    "        def Material \"{name}\"\n        {{\n            \
+                     token outputs:surface.connect = <{path}/PreviewSurface.outputs:surface>\n\n            \
+                     def Shader \"PreviewSurface\"\n            {{\n                \
+                     uniform token info:id = \"UsdPreviewSurface\"\n                \
+                     color3f inputs:diffuseColor = ({}, {}, {})\n                \
+                     float inputs:metallic = 0\n                \
+                     float inputs:opacity = {}\n                \
+                     float inputs:roughness = {}\n                \
+                     token outputs:surface\n            }}\n        }}\n",
+                    f32_text(r),
+                    f32_text(g),
+                    f32_text(b),
+                    f32_text(opacity),
+                    f32_text(mat.roughness),
+                    name = mat.name,
+                );
+            }
+        }
+        s.push_str("    }\n\n");
         s
     }
 
@@ -735,6 +860,7 @@ impl UsdaWriter {
             "def Xform \"{}\" (\n    kind = \"component\"\n)\n{{\n",
             self.root
         );
+        head.push_str(&self.looks());
         file.writer()
             .write_all(head.as_bytes())
             .map_err(io(&path))?;
@@ -832,6 +958,7 @@ impl UsdaWriter {
             rel(&manifest_dest),
             self.root
         );
+        t.push_str(&self.looks());
         main.write_all(t.as_bytes()).map_err(io(&path))?;
         for k in 0..self.meta.swarms.len() {
             let out = main.writer();
@@ -935,17 +1062,141 @@ fn stale_clips(clips_dir: &Path, shot: &str, keep: &[PathBuf]) -> Vec<PathBuf> {
     stale_files
 }
 
-/// One mesh prim of the prototype.
-fn mesh_text(s: &mut String, name: &str, proxy: &ProxyMesh) {
-    let m: &PolyMesh = &proxy.mesh;
-    let color = {
-        let mut t = Vec::new();
-        let [r, g, b] = proxy.color;
-        push_vec3(&mut t, Vec3::new(r, g, b));
-        String::from_utf8(t).expect("ASCII")
-    };
-    let opacity = proxy.opacity.map(f32_text);
+/// One part of a prototype: its mesh (the wing a display draws), where it sits in the body
+/// frame, and whether it is a wing (`Some(right)`) that turns about its hinge.
+#[derive(Clone, Debug)]
+struct ProtoPart {
+    name: &'static str,
+    /// Primitives with their material (`Species::materials` index), in the part frame.
+    prims: Vec<(Primitive, usize)>,
+    materials: Vec<(&'static str, Alpha, [f32; 3])>,
+    /// Opacity of the membrane materials under the wing display.
+    membrane_opacity: f32,
+    /// The part frame's origin in the body frame (a wing: its hinge).
+    translate: Vec3,
+    flap: Option<bool>,
+}
+
+/// The prototype of a species: its meshes (`Species::meshes`, as glTF draws them) flattened
+/// into the body frame, one Mesh prim per part with a mesh. A part's parents only move it
+/// (the honeybee's and every species' parts hang off an unturned body); a channel-driven
+/// part rests at 0 (USD instances share one prototype, so per-bee part motion is not drawn).
+fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart> {
+    let meshes = (sp.meshes)(length);
+    assert_eq!(
+        meshes.len(),
+        sp.parts.len(),
+        "species {}: one mesh entry per part",
+        sp.name
+    );
+    let mut at: Vec<Vec3> = Vec::new();
+    let mut out = Vec::new();
+    for (part, pm) in sp.parts.iter().zip(meshes) {
+        let parent = part.parent.map_or(Vec3::ZERO, |p| at[p]);
+        let translate = match part.drive {
+            // The attitude part sits at the agent's centre.
+            Drive::Attitude => parent,
+            _ => parent + pm.offset,
+        };
+        at.push(translate);
+        if pm.primitives.is_empty() {
+            continue;
+        }
+        let flap = match part.drive {
+            Drive::Flap { right } => Some(right),
+            _ => None,
+        };
+        let prims = pm
+            .primitives
+            .into_iter()
+            .map(|(p, m)| match flap {
+                Some(right) => (wings::mesh(&p, display, right), m),
+                None => (p, m),
+            })
+            .collect();
+        out.push(ProtoPart {
+            name: part.name,
+            prims,
+            materials: sp
+                .materials
+                .iter()
+                .map(|m| (m.name, m.alpha, m.rgb))
+                .collect(),
+            membrane_opacity: wings::alpha(display),
+            translate,
+            flap,
+        });
+    }
+    out
+}
+
+/// The radius of a sphere at the origin holding the corners of the prototype's bounding
+/// box at any time (a wing swept through every turn about its hinge line). USD bounds an
+/// instancer by each instance's transformed prototype box, so a sphere around the box,
+/// not around the points, is what contains `ComputeExtentAtTime` under every rotation.
+fn bound_radius(parts: &[ProtoPart]) -> f32 {
+    let (mut lo, mut hi) = (Vec3::MAX, Vec3::MIN);
+    for part in parts {
+        for (prim, _) in &part.prims {
+            for p in &prim.positions {
+                let p = Vec3::from(*p);
+                let (a, b) = match part.flap {
+                    // Turning about X keeps x and the distance from the hinge line.
+                    Some(_) => {
+                        let r = p.y.hypot(p.z);
+                        (Vec3::new(p.x, -r, -r), Vec3::new(p.x, r, r))
+                    }
+                    None => (p, p),
+                };
+                lo = lo.min(a + part.translate);
+                hi = hi.max(b + part.translate);
+            }
+        }
+    }
+    lo.abs().max(hi.abs()).length()
+}
+
+/// A wing's turn about its hinge line (part X), degrees.
+enum Turn {
+    None,
+    Still(f32),
+    /// (frame, degrees), one per frame.
+    Sampled(Vec<(i32, f32)>),
+}
+
+/// A wing's time-sampled turn about its hinge line.
+fn turn_samples(s: &mut String, ind: &str, samples: &[(i32, f32)]) {
+    let _ = writeln!(s, "{ind}float xformOp:rotateX.timeSamples = {{");
+    for (f, deg) in samples {
+        let _ = writeln!(s, "{ind}    {f}: {},", f32_text(*deg));
+    }
+    let _ = writeln!(s, "{ind}}}");
+}
+
+/// One mesh prim of the prototype: triangles with vertex normals, bound to the shot's
+/// `Looks` materials (one `GeomSubset` per material when it has several, as the body's
+/// bands), with `displayColor`/`displayOpacity` for viewers that draw no materials.
+fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
     let ind = "                    ";
+    let mut points: Vec<Vec3> = Vec::new();
+    let mut normals: Vec<Vec3> = Vec::new();
+    let mut indices: Vec<i32> = Vec::new();
+    // Faces per material, in order of first use.
+    let mut subsets: Vec<(usize, Vec<usize>)> = Vec::new();
+    let mut face_material = Vec::new();
+    for (prim, m) in &part.prims {
+        let base = points.len() as i32;
+        let first_face = indices.len() / 3;
+        points.extend(prim.positions.iter().map(|p| Vec3::from(*p)));
+        normals.extend(prim.normals.iter().map(|n| Vec3::from(*n)));
+        indices.extend(prim.indices.iter().map(|&i| base + i as i32));
+        let faces = first_face..indices.len() / 3;
+        face_material.extend(faces.clone().map(|_| *m));
+        match subsets.iter_mut().find(|(mm, _)| mm == m) {
+            Some((_, f)) => f.extend(faces),
+            None => subsets.push((*m, faces.collect())),
+        }
+    }
     let vec3_list = |vs: &[Vec3]| {
         let mut t = Vec::new();
         for (i, v) in vs.iter().enumerate() {
@@ -956,41 +1207,121 @@ fn mesh_text(s: &mut String, name: &str, proxy: &ProxyMesh) {
         }
         String::from_utf8(t).expect("ASCII")
     };
-    let ints = |vs: &[i32]| {
-        vs.iter()
-            .map(|v| v.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
+    let ints = |vs: &mut dyn Iterator<Item = i64>| {
+        vs.map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
     };
-    let _ = writeln!(s, "{}def Mesh \"{name}\"\n{}{{", &ind[4..], &ind[4..]);
-    if opacity.is_some() {
-        // Wings are single sheets.
+    let material = |m: usize| part.materials[m];
+    let binding = |m: usize| format!("rel material:binding = <{looks}/{}>", material(m).0);
+    let membrane = subsets
+        .iter()
+        .any(|&(m, _)| material(m).1 == Alpha::Membrane);
+    let _ = writeln!(
+        s,
+        "{}def Mesh \"{}\" (\n{ind}prepend apiSchemas = [\"MaterialBindingAPI\"]\n{}){}{{",
+        &ind[4..],
+        part.name,
+        &ind[4..],
+        format_args!("\n{}", &ind[4..])
+    );
+    if membrane {
+        // Wings are single sheets, seen from both sides.
         let _ = writeln!(s, "{ind}uniform bool doubleSided = 1");
     }
-    let _ = writeln!(s, "{ind}float3[] extent = [{}]", vec3_list(&m.extent()));
+    let (mut lo, mut hi) = (Vec3::MAX, Vec3::MIN);
+    for p in &points {
+        (lo, hi) = (lo.min(*p), hi.max(*p));
+    }
+    let _ = writeln!(s, "{ind}float3[] extent = [{}]", vec3_list(&[lo, hi]));
     let _ = writeln!(
         s,
         "{ind}int[] faceVertexCounts = [{}]",
-        ints(&m.face_counts)
+        ints(&mut (0..indices.len() / 3).map(|_| 3))
     );
     let _ = writeln!(
         s,
         "{ind}int[] faceVertexIndices = [{}]",
-        ints(&m.face_indices)
+        ints(&mut indices.iter().map(|&i| i as i64))
     );
-    let _ = writeln!(s, "{ind}point3f[] points = [{}]", vec3_list(&m.points));
+    if subsets.len() == 1 {
+        let _ = writeln!(s, "{ind}{}", binding(subsets[0].0));
+    }
     let _ = writeln!(
         s,
-        "{ind}color3f[] primvars:displayColor = [{color}] (\n{ind}    interpolation = \"constant\"\n{ind})"
+        "{ind}normal3f[] normals = [{}] (\n{ind}    interpolation = \"vertex\"\n{ind})",
+        vec3_list(&normals)
     );
-    if let Some(o) = opacity {
+    let _ = writeln!(s, "{ind}point3f[] points = [{}]", vec3_list(&points));
+    let colour = |m: usize| Vec3::from(material(m).2);
+    let (colours, interpolation) = if subsets.len() == 1 {
+        (vec![colour(subsets[0].0)], "constant")
+    } else {
+        (
+            face_material.iter().map(|&m| colour(m)).collect(),
+            "uniform",
+        )
+    };
+    let _ = writeln!(
+        s,
+        "{ind}color3f[] primvars:displayColor = [{}] (\n{ind}    interpolation = \"{interpolation}\"\n{ind})",
+        vec3_list(&colours)
+    );
+    if membrane {
         let _ = writeln!(
             s,
-            "{ind}float[] primvars:displayOpacity = [{o}] (\n{ind}    interpolation = \"constant\"\n{ind})"
+            "{ind}float[] primvars:displayOpacity = [{}] (\n{ind}    interpolation = \"constant\"\n{ind})",
+            f32_text(part.membrane_opacity)
         );
     }
-    // Low-poly on purpose: rendered as is, not subdivided.
+    // Rendered as is, not subdivided.
     let _ = writeln!(s, "{ind}uniform token subdivisionScheme = \"none\"");
+    if subsets.len() > 1 {
+        let _ = writeln!(
+            s,
+            "{ind}uniform token subsetFamily:materialBind:familyType = \"partition\""
+        );
+    }
+    let mut ops = Vec::new();
+    if part.translate != Vec3::ZERO {
+        let mut t = Vec::new();
+        push_vec3(&mut t, part.translate);
+        let _ = writeln!(
+            s,
+            "{ind}double3 xformOp:translate = {}",
+            String::from_utf8(t).expect("ASCII")
+        );
+        ops.push("\"xformOp:translate\"");
+    }
+    match turn {
+        Turn::None => {}
+        Turn::Still(deg) => {
+            let _ = writeln!(s, "{ind}float xformOp:rotateX = {}", f32_text(deg));
+            ops.push("\"xformOp:rotateX\"");
+        }
+        Turn::Sampled(samples) => {
+            turn_samples(s, ind, &samples);
+            ops.push("\"xformOp:rotateX\"");
+        }
+    }
+    if !ops.is_empty() {
+        let _ = writeln!(
+            s,
+            "{ind}uniform token[] xformOpOrder = [{}]",
+            ops.join(", ")
+        );
+    }
+    if subsets.len() > 1 {
+        for (m, faces) in &subsets {
+            let _ = write!(
+                s,
+                "\n{ind}def GeomSubset \"{}\" (\n{ind}    prepend apiSchemas = [\"MaterialBindingAPI\"]\n{ind})\n{ind}{{\n\
+                 {ind}    uniform token elementType = \"face\"\n{ind}    uniform token familyName = \"materialBind\"\n\
+                 {ind}    int[] indices = [{}]\n{ind}    {}\n{ind}}}\n",
+                material(*m).0,
+                ints(&mut faces.iter().map(|&f| f as i64)),
+                binding(*m)
+            );
+        }
+    }
     let _ = writeln!(s, "{}}}", &ind[4..]);
 }
 
@@ -1125,7 +1456,12 @@ mod tests {
 
     fn bake(dir: &Path, m: &CacheMeta, clip_frames: u32) -> Result<Vec<PathBuf>> {
         let path = dir.join(format!("{}.usda", m.shot_name));
-        let mut w: Box<dyn CacheWriter> = Box::new(UsdaWriter::create(&path, m, clip_frames)?);
+        let mut w: Box<dyn CacheWriter> = Box::new(UsdaWriter::create(
+            &path,
+            m,
+            clip_frames,
+            WingDisplay::Blur,
+        )?);
         for f in m.frame_start..=m.frame_end {
             let mut first = 100;
             let swarms: Vec<SwarmFrame> = m
@@ -1208,8 +1544,17 @@ mod tests {
             "def Mesh \"body\"",
             "def Mesh \"wing_l\"",
             "def Mesh \"wing_r\"",
-            "color3f[] primvars:displayColor = [(0.55, 0.36, 0.08)]",
-            "float[] primvars:displayOpacity = [0.35]",
+            "def Scope \"Looks\"",
+            "def Material \"bee_yellow\"",
+            "uniform token info:id = \"UsdPreviewSurface\"",
+            "color3f inputs:diffuseColor = (0.85, 0.55, 0.05)",
+            "float inputs:opacity = 0.16",
+            "prepend apiSchemas = [\"MaterialBindingAPI\"]",
+            "uniform token subsetFamily:materialBind:familyType = \"partition\"",
+            "def GeomSubset \"bee_black\"",
+            "rel material:binding = </test_shot/Looks/bee_wing>",
+            "normal3f[] normals = [",
+            "float[] primvars:displayOpacity = [0.16]",
         ] {
             assert!(t.contains(needle), "missing {needle:?}");
         }
@@ -1243,8 +1588,12 @@ mod tests {
             "        float3[] scales = [(1, 1, 1), (1.01, 1.01, 1.01), (1.02, 1.02, 1.02)]\n"
         ));
         assert!(!t.contains("scales.timeSamples"));
+        // (`inf` alone would match the shaders' `info:id`.)
         assert!(
-            !t.contains("NaN") && !t.contains("inf") && !t.contains("-0,") && !t.contains(".0,")
+            !t.contains("NaN")
+                && ["inf,", "inf)", "inf]"].iter().all(|n| !t.contains(n))
+                && !t.contains("-0,")
+                && !t.contains(".0,")
         );
         // Four samples per block, in frame order.
         let pos = t.find("point3f[] positions.timeSamples").unwrap();
@@ -1258,11 +1607,42 @@ mod tests {
     }
 
     #[test]
+    fn flapping_wings_get_one_prototype_per_phase_group() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = meta(&[10], (1, 6));
+        let path = dir.path().join("test-shot.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Flap { hz: 4.0 }).unwrap();
+        for f in 1..=6 {
+            let s = swarm_frame(10, f, 100);
+            w.write_frame(&Frame {
+                frame: f,
+                time: 0.0,
+                swarms: std::slice::from_ref(&s),
+            })
+            .unwrap();
+        }
+        crate::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
+        let t = std::fs::read_to_string(&path).unwrap();
+        // Ids 100..110: groups 4, 5, 6, 7, 0, 1, ...
+        assert!(t.contains("int[] protoIndices = [4, 5, 6, 7, 0, 1, 2, 3, 4, 5]\n"));
+        assert!(t.contains("rel prototypes = [</test_shot/swarm0/Prototypes/honeybee_0>, "));
+        assert!(t.contains("def Xform \"honeybee_7\" (\n                prepend references = </test_shot/swarm0/Prototypes/honeybee_0>"));
+        // One set of meshes; each group's wings turn once per frame, shifted by 1/8 beat.
+        assert_eq!(t.matches("def Mesh \"body\"").count(), 1);
+        assert_eq!(t.matches("float xformOp:rotateX.timeSamples").count(), 16);
+        let turn =
+            |g: usize, f: i32| wings::turn_deg(wings::angle(4.0, (f - 1) as f64 / 24.0, g), true);
+        assert!(t.contains(&format!("    2: {},\n", f32_text(turn(0, 2)))));
+        assert_ne!(turn(0, 2), turn(1, 2));
+        assert!(t.contains("float inputs:opacity = 0.45"));
+    }
+
+    #[test]
     fn orientations_are_real_first_halves() {
         let dir = tempfile::tempdir().unwrap();
         let m = meta(&[2], (0, 0));
         let path = dir.path().join("q.usda");
-        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
         let mut s = swarm_frame(2, 0, 1);
         s.orientation = vec![
             Quat::IDENTITY,
@@ -1285,7 +1665,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let m = meta(&[3], (1, 1));
         let path = dir.path().join("n.usda");
-        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
         let mut s = swarm_frame(3, 1, 40);
         s.velocity[2].y = f32::NAN;
         let e = w
@@ -1306,7 +1686,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let m = meta(&[2], (1, 3));
         let path = dir.path().join("c.usda");
-        let mut w = UsdaWriter::create(&path, &m, 0).unwrap();
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
         let s = swarm_frame(2, 1, 0);
         let frame = |f, s: &SwarmFrame| -> Result<()> {
             let swarms = [s.clone()];
@@ -1349,7 +1729,7 @@ mod tests {
             .collect();
         for clip_frames in [0, 2] {
             let path = dir.path().join("test-shot.usda");
-            let mut w = UsdaWriter::create(&path, &m, clip_frames).unwrap();
+            let mut w = UsdaWriter::create(&path, &m, clip_frames, WingDisplay::Blur).unwrap();
             for f in 1..=5 {
                 let s = swarm_frame(4, f, 1);
                 w.write_frame(&Frame {

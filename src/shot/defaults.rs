@@ -46,8 +46,12 @@ pub const SURFACE: (f64, f64) = (0.05, 1.0);
 
 pub const OUTPUT_DIR: &str = "out";
 pub const OUTPUT_FORMATS: [&str; 2] = ["glb", "usda"];
-/// Visible wing flap rate in glTF, Hz, from 0 to fps/2 (the real ~230 Hz would alias at any
-/// frame rate). 0, the default, holds the wings still at mid-stroke with a more transparent
-/// membrane: what a camera sees of a real beat. A few Hz gives a stylised, readable flap
-/// (see docs/caches.md, glTF).
-pub const WING_FLAP_HZ: f64 = 0.0;
+/// How wings are drawn when the shot does not say: a blurred stroke, what a camera sees of
+/// a real 230 Hz beat (see docs/caches.md, Wings).
+pub const WINGS: &str = "blur";
+/// The visible flap rate of `wings = "flap"` when `wing_flap_hz` is not given: 6 Hz, or a
+/// sixth of the frame rate if that is less (4 Hz at 24 fps: six keys per beat, so every
+/// phase group shows a full stroke).
+pub const WING_FLAP_HZ: f64 = 6.0;
+/// The glTF layout when the shot does not say: today's node per part.
+pub const GLTF_LAYOUT: &str = "parts";

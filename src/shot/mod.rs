@@ -14,7 +14,7 @@ pub use crate::geometry::Shape;
 use crate::model::ParamValues;
 pub use crate::model::{Body, ModelKind, TargetKind, Variation};
 use glam::Vec3;
-pub use output::{Format, OutputOptions};
+pub use output::{Format, GltfLayout, OutputOptions, WingDisplay};
 use std::path::{Path, PathBuf};
 
 /// The default shot baked by `beeswarm bake` without a file.

@@ -36,11 +36,66 @@ impl Format {
     }
 }
 
+/// How wings are drawn in the caches (glTF and USD alike). A real wing beat (a honeybee's
+/// 230 Hz) sampled at 24–60 fps aliases into noise, so the caches show a stand-in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WingDisplay {
+    /// Held at mid-stroke, a clear membrane: a fast shutter's view.
+    Still,
+    /// A translucent fan of ghosted wings over the whole stroke: a slow shutter's view of
+    /// the real beat.
+    Blur,
+    /// A stylised flap at a visible rate (Hz, above 0 and at most fps / 2), in phase
+    /// groups so a swarm does not beat in lockstep.
+    Flap { hz: f64 },
+}
+
+impl WingDisplay {
+    pub fn name(self) -> &'static str {
+        match self {
+            WingDisplay::Still => "still",
+            WingDisplay::Blur => "blur",
+            WingDisplay::Flap { .. } => "flap",
+        }
+    }
+
+    /// The flap rate in Hz; 0 when the wings do not move.
+    pub fn flap_hz(self) -> f64 {
+        match self {
+            WingDisplay::Flap { hz } => hz,
+            _ => 0.0,
+        }
+    }
+}
+
+/// The glTF scene layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GltfLayout {
+    /// One node per agent (its path), one per part under it (body motion, wings): the
+    /// most to animate with, 2–4 animated nodes per agent.
+    Parts,
+    /// One animated node per agent holding the simulated pose and the static parts as one
+    /// mesh; only parts that move on their own (a flapping wing) get child nodes. Far
+    /// faster to import (one object and two tracks per agent).
+    Agent,
+}
+
+impl GltfLayout {
+    pub fn name(self) -> &'static str {
+        match self {
+            GltfLayout::Parts => "parts",
+            GltfLayout::Agent => "agent",
+        }
+    }
+}
+
 /// Per-format settings from the shot's `[output]` table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OutputOptions {
-    /// Visible wing flap rate written to glTF wing tracks, Hz. 0 = a static blurred pose.
-    pub gltf_wing_flap_hz: f64,
+    /// How wings are drawn, in every format that draws them.
+    pub wings: WingDisplay,
+    /// The glTF scene layout.
+    pub gltf_layout: GltfLayout,
     /// Split USDA time samples into value clips of this many frames (0 = one file);
     /// `None`: chosen from the cache's size (see `export::usda::auto_clip_frames`).
     pub usda_clip_frames: Option<u32>,
@@ -49,7 +104,8 @@ pub struct OutputOptions {
 impl Default for OutputOptions {
     fn default() -> Self {
         OutputOptions {
-            gltf_wing_flap_hz: 0.0,
+            wings: WingDisplay::Blur,
+            gltf_layout: GltfLayout::Parts,
             usda_clip_frames: None,
         }
     }

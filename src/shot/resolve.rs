@@ -164,6 +164,62 @@ impl Ctx<'_> {
     }
 }
 
+/// `[output] wings` and `wing_flap_hz`. A shot that gives only `wing_flap_hz > 0` (the
+/// older way to ask for a flap) flaps; `wing_flap_hz` with a still or blurred display is
+/// refused rather than ignored.
+fn resolve_wings(cx: &Ctx, ro: &RawOutput, fps: f64) -> Result<WingDisplay, ShotError> {
+    let hz_range = |hz: f64| {
+        cx.range(
+            "output.wing_flap_hz",
+            hz,
+            0.0,
+            fps / 2.0,
+            &format!(
+                "a visible flap rate above 0 and up to half the frame rate ({} Hz at {fps} fps)",
+                fps / 2.0
+            ),
+        )
+    };
+    let name = match ro.wings.as_deref() {
+        Some(w) => cx.one_of("output.wings", w, &["still", "blur", "flap"])?,
+        None if ro.wing_flap_hz.is_some_and(|hz| hz != 0.0) => "flap",
+        None => d::WINGS,
+    };
+    Ok(match name {
+        "flap" => {
+            let hz = hz_range(
+                ro.wing_flap_hz
+                    .unwrap_or_else(|| d::WING_FLAP_HZ.min(fps / 6.0)),
+            )?;
+            if hz == 0.0 {
+                return Err(cx.err(
+                    "output.wing_flap_hz",
+                    "expected a flap rate above 0 with wings = \"flap\" (use wings = \"still\" or \"blur\" for wings that do not move)",
+                ));
+            }
+            WingDisplay::Flap { hz }
+        }
+        other => {
+            if let Some(hz) = ro.wing_flap_hz {
+                hz_range(hz)?;
+                if hz != 0.0 {
+                    return Err(cx.err(
+                        "output.wing_flap_hz",
+                        format!(
+                            "wing_flap_hz = {hz} only applies to wings = \"flap\", and wings = \"{other}\" here"
+                        ),
+                    ));
+                }
+            }
+            if other == "still" {
+                WingDisplay::Still
+            } else {
+                WingDisplay::Blur
+            }
+        }
+    })
+}
+
 fn quoted(options: &[&str]) -> String {
     options
         .iter()
@@ -423,16 +479,15 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
     if formats.is_empty() {
         return Err(cx.err("output.formats", "expected at least one format"));
     }
-    let wing_flap_hz = cx.range(
-        "output.wing_flap_hz",
-        ro.wing_flap_hz.unwrap_or(d::WING_FLAP_HZ),
-        0.0,
-        fps / 2.0,
-        &format!(
-            "a visible flap rate from 0 (blurred) up to half the frame rate ({} Hz at {fps} fps)",
-            fps / 2.0
-        ),
-    )?;
+    let wings = resolve_wings(&cx, &ro, fps)?;
+    let gltf_layout = match cx.one_of(
+        "output.gltf_layout",
+        ro.gltf_layout.as_deref().unwrap_or(d::GLTF_LAYOUT),
+        &["parts", "agent"],
+    )? {
+        "agent" => GltfLayout::Agent,
+        _ => GltfLayout::Parts,
+    };
     let usda_clip_frames = match ro.usda_clip_frames {
         Some(clip) => Some(cx.range(
             "output.usda_clip_frames",
@@ -460,7 +515,8 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             formats,
             preview: ro.preview.unwrap_or(false),
             options: OutputOptions {
-                gltf_wing_flap_hz: wing_flap_hz,
+                wings,
+                gltf_layout,
                 usda_clip_frames,
             },
         },

@@ -137,7 +137,9 @@ pub struct RawOutput {
     pub dir: Option<String>,
     pub formats: Option<Vec<String>>,
     pub preview: Option<bool>,
+    pub wings: Option<String>,
     pub wing_flap_hz: Option<f64>,
+    pub gltf_layout: Option<String>,
     pub usda_clip_frames: Option<i64>,
 }
 

@@ -1,5 +1,5 @@
 //! The honeybee: a worker bee recorded with pitch, roll and sway, drawn as a striped body
-//! with two wings.
+//! with two wings (the same geometry in glTF and USD).
 //!
 //! ```text
 //! body      Attitude: the simulated pitch/roll wobble, offset sideways by `sway`
@@ -8,9 +8,8 @@
 //! ```
 
 mod mesh;
-mod proxy;
 
-use super::{Alpha, Channel, Drive, Material, Part, PartMesh, ProxyMesh, Species};
+use super::{Alpha, Channel, Drive, Material, Part, PartMesh, Species};
 
 pub use mesh::BeeMesh;
 
@@ -85,10 +84,9 @@ pub static HONEYBEE: Species = Species {
         },
     ],
     meshes,
-    proxies,
 };
 
-/// glTF geometry: the striped body (yellow and black bands) and two wings at their hinges.
+/// The striped body (yellow and black bands) and two wings at their hinges, for glTF and USD.
 fn meshes(length: f32) -> Vec<PartMesh> {
     let bee = BeeMesh::new(length);
     let h = bee.wing_hinge_right;
@@ -108,24 +106,6 @@ fn meshes(length: f32) -> Vec<PartMesh> {
     ]
 }
 
-/// USD prototype geometry: a low-poly body and two flat wings, in the body frame.
-fn proxies(length: f32) -> Vec<ProxyMesh> {
-    let wing = |right: bool| ProxyMesh {
-        mesh: proxy::wing(length, right),
-        color: [0.86, 0.88, 0.9],
-        opacity: Some(0.35),
-    };
-    vec![
-        ProxyMesh {
-            mesh: proxy::body(length),
-            color: [0.55, 0.36, 0.08],
-            opacity: None,
-        },
-        wing(false),
-        wing(true),
-    ]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,7 +120,6 @@ mod tests {
             [WING_L, WING_R]
         );
         assert_eq!((HONEYBEE.meshes)(0.012).len(), HONEYBEE.parts.len());
-        assert_eq!((HONEYBEE.proxies)(0.012).len(), HONEYBEE.parts.len());
         let lateral = HONEYBEE.lateral_offset.unwrap();
         assert!(
             BEE_CHANNELS

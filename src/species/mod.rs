@@ -43,13 +43,11 @@ pub struct Species {
     /// heading frame's +Z (honeybee: `"sway"`); `None`, or a channel the swarm does not
     /// record, means 0.
     pub lateral_offset: Option<&'static str>,
-    /// Materials the glTF meshes refer to by index.
+    /// Materials the meshes refer to by index (glTF PBR materials, USD UsdPreviewSurface).
     pub materials: &'static [Material],
-    /// glTF geometry for a body length in metres: one entry per part, in part order.
+    /// Geometry for a body length in metres, one entry per part in part order: the glTF
+    /// meshes and the USD prototype alike, so both formats draw the same insect.
     pub meshes: fn(f32) -> Vec<PartMesh>,
-    /// USD prototype geometry for a body length in metres: one entry per part, in part
-    /// order, in the body frame (the prototype is not articulated).
-    pub proxies: fn(f32) -> Vec<ProxyMesh>,
 }
 
 impl std::fmt::Debug for Species {
@@ -124,8 +122,9 @@ pub enum Drive {
     /// The simulated attitude (the body part): rotation heading⁻¹·orientation,
     /// translation (0, 0, lateral offset), the agent's scale. Sits at the agent's centre.
     Attitude,
-    /// A wing flapping at the output's visible flap rate about the part's X axis (the
-    /// hinge line), tip up positive; the right wing's tip points +Z.
+    /// A wing drawn as the output's wing display says (`export::wings`: still, a blurred
+    /// fan, or a visible flap) about the part's X axis (the hinge line), tip up positive;
+    /// the right wing's tip points +Z.
     Flap { right: bool },
     /// Rotation about `axis` (part frame) by the channel's value in degrees.
     Channel { channel: &'static str, axis: Vec3 },
@@ -143,7 +142,8 @@ pub enum Alpha {
     Membrane,
 }
 
-/// A glTF PBR material: base colour (linear RGB), roughness, non-metallic.
+/// A material: base colour (linear RGB), roughness, non-metallic. glTF writes it as a PBR
+/// material, USD as a `UsdPreviewSurface`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     pub name: &'static str,
@@ -182,6 +182,32 @@ impl Primitive {
         }
     }
 
+    /// The primitive turned by `rotation`, then moved by `offset` (normals turned too).
+    pub fn transformed(&self, rotation: glam::Quat, offset: Vec3) -> Primitive {
+        Primitive {
+            positions: self
+                .positions
+                .iter()
+                .map(|p| (rotation * Vec3::from(*p) + offset).to_array())
+                .collect(),
+            normals: self
+                .normals
+                .iter()
+                .map(|n| (rotation * Vec3::from(*n)).normalize().to_array())
+                .collect(),
+            indices: self.indices.clone(),
+        }
+    }
+
+    /// Appends another primitive's vertices and triangles.
+    pub fn extend(&mut self, other: &Primitive) {
+        let base =
+            u16::try_from(self.positions.len()).expect("a part mesh is far below 65,536 vertices");
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.indices.extend(other.indices.iter().map(|i| base + i));
+    }
+
     /// Component-wise bounds of the positions (glTF requires them on POSITION).
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         let mut lo = [f32::INFINITY; 3];
@@ -205,58 +231,4 @@ pub struct PartMesh {
     /// Rest translation of the part in its parent's frame (a wing: its hinge). Ignored for
     /// `Drive::Attitude` parts, which sit at the agent's centre.
     pub offset: Vec3,
-}
-
-/// A polygon mesh: points, one vertex count per face, vertex indices.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PolyMesh {
-    pub points: Vec<Vec3>,
-    pub face_counts: Vec<i32>,
-    pub face_indices: Vec<i32>,
-}
-
-impl PolyMesh {
-    pub fn extent(&self) -> [Vec3; 2] {
-        let lo = self.points.iter().copied().fold(Vec3::MAX, Vec3::min);
-        let hi = self.points.iter().copied().fold(Vec3::MIN, Vec3::max);
-        [lo, hi]
-    }
-}
-
-/// The (unnormalised) normal of a polygon by Newell's method: right-handed winding.
-pub fn newell_normal(points: &[Vec3], face: &[i32]) -> Vec3 {
-    let mut n = Vec3::ZERO;
-    for i in 0..face.len() {
-        let a = points[face[i] as usize];
-        let b = points[face[(i + 1) % face.len()] as usize];
-        n += Vec3::new(
-            (a.y - b.y) * (a.z + b.z),
-            (a.z - b.z) * (a.x + b.x),
-            (a.x - b.x) * (a.y + b.y),
-        );
-    }
-    n
-}
-
-/// The USD geometry of one part, in the body frame, with its display colour.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ProxyMesh {
-    pub mesh: PolyMesh,
-    /// `primvars:displayColor`, linear RGB.
-    pub color: [f32; 3],
-    /// `primvars:displayOpacity`; a part with an opacity is a double-sided sheet.
-    pub opacity: Option<f32>,
-}
-
-/// The radius of a sphere at the origin holding the corners of the bounding box of every
-/// proxy mesh. USD bounds an instancer by each instance's transformed prototype box, so a
-/// sphere around the box, not around the points, is what contains
-/// `UsdGeomPointInstancer::ComputeExtentAtTime` under every rotation.
-pub fn bound_radius(proxies: &[ProxyMesh]) -> f32 {
-    let (mut lo, mut hi) = (Vec3::MAX, Vec3::MIN);
-    for p in proxies {
-        let [a, b] = p.mesh.extent();
-        (lo, hi) = (lo.min(a), hi.max(b));
-    }
-    lo.abs().max(hi.abs()).length()
 }

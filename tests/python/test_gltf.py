@@ -46,6 +46,7 @@ SHOT = textwrap.dedent(
     [output]
     formats = ["glb"]
     wing_flap_hz = @FLAP@
+    gltf_layout = "@LAYOUT@"
     """
 )
 
@@ -58,12 +59,17 @@ def _missing(what):
     pytest.skip(f"{what} is not available")
 
 
-@pytest.fixture(scope="module", params=[6, 0], ids=["flap6hz", "blurred"])
+def shot_text(flap, layout="parts"):
+    return SHOT.replace("@FLAP@", str(flap)).replace("@LAYOUT@", layout)
+
+
+@pytest.fixture(scope="module", params=[(6, "parts"), (0, "parts"), (6, "agent"), (0, "agent")],
+                ids=["flap6hz", "blurred", "agent-flap6hz", "agent-blurred"])
 def baked(request, beeswarm_bin, tmp_path_factory):
-    """One bake per wing mode: {format: path}."""
-    flap = request.param
-    out = tmp_path_factory.mktemp(f"gltf_flap{flap}")
-    bake(beeswarm_bin, SHOT.replace("@FLAP@", str(flap)), out, "--format", "glb,gltf,csv")
+    """One bake per wing mode and layout: {format: path}."""
+    flap, layout = request.param
+    out = tmp_path_factory.mktemp(f"gltf_flap{flap}_{layout}")
+    bake(beeswarm_bin, shot_text(flap, layout), out, "--format", "glb,gltf,csv")
     files = {
         "glb": out / "gltf_test.glb",
         "gltf": out / "gltf_test.gltf",
@@ -72,6 +78,7 @@ def baked(request, beeswarm_bin, tmp_path_factory):
     }
     files["dir"] = out
     files["flap"] = flap
+    files["layout"] = layout
     return files
 
 
@@ -134,6 +141,9 @@ def test_document_matches_the_tracks(baked):
         1 for c in anim["channels"] if doc["nodes"][c["target"]["node"]]["name"].endswith(("_wing_l", "_wing_r"))
     )
     assert wing_tracks == (2 * BEES if baked["flap"] else 0)
+    animated = {c["target"]["node"] for c in anim["channels"]}
+    per_bee = 1 + (2 if baked["flap"] else 0) if baked["layout"] == "agent" else (4 if baked["flap"] else 2)
+    assert len(animated) == per_bee * BEES
     # The .gltf is the same document with an external buffer.
     gltf = load_json(baked["gltf"])
     assert gltf["buffers"][0]["uri"] == "gltf_test.bin"
@@ -174,8 +184,10 @@ scene.frame_start = 0
 scene.frame_end = frames[1] - frames[0]
 out["scene_range"] = [scene.frame_start, scene.frame_end]
 bee = bpy.data.objects[out["bees"][0]]
-body = bpy.data.objects[out["bees"][0] + "_body"]
+# The agent layout has no body node: the bee node is the body.
+body = bpy.data.objects.get(out["bees"][0] + "_body", bee)
 out["body_parent"] = body.parent.name
+out["objects"] = len(bpy.data.objects)
 poses = {}
 for f in (frames[0], (frames[0] + frames[1]) // 2, frames[1]):
     scene.frame_set(f - frames[0])
@@ -223,7 +235,11 @@ def test_blender_import_reproduces_the_tracks(baked, fmt):
     assert got["scene_range"] == [0, FRAMES[1] - FRAMES[0]]
 
     bee = int(got["bees"][0][4:])
-    assert got["body_parent"] == got["bees"][0]
+    agent = baked["layout"] == "agent"
+    # parts: swarm root + 4 objects per bee; agent: 1 per bee (+2 wings when they flap).
+    per_bee = (3 if baked["flap"] else 1) if agent else 4
+    assert got["objects"] == 1 + per_bee * BEES
+    assert got["body_parent"] == ("bees" if agent else got["bees"][0])
     # Y-up → Z-up on import: (x, y, z) → (x, -z, y), which is c = +90° about X; points and
     # body axes both turn, so a world rotation q becomes c·q·c⁻¹.
     c = (0.5 ** 0.5, 0.5 ** 0.5, 0.0, 0.0)
@@ -237,7 +253,7 @@ def test_blender_import_reproduces_the_tracks(baked, fmt):
         assert dot == pytest.approx(1.0, abs=1e-5), f"frame {f}: {pose['q']} vs {q}"
         # The bee (path) node sits off the body by exactly the sway.
         off = sum((a - b) ** 2 for a, b in zip(pose["p"], pose["path"])) ** 0.5
-        assert off == pytest.approx(abs(row["sway"]), abs=1e-5), f"frame {f}"
+        assert off == pytest.approx(0.0 if agent else abs(row["sway"]), abs=1e-5), f"frame {f}"
     assert any(abs(tracks[bee][int(f)]["sway"]) > 1e-3 for f in got["poses"]), "sway untested"
 
 
@@ -246,13 +262,13 @@ def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
     import signal
 
     out = tmp_path
-    bake(beeswarm_bin, SHOT.replace("@FLAP@", "0"), out, "--format", "glb,gltf")
+    bake(beeswarm_bin, shot_text(0), out, "--format", "glb,gltf")
     before = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".glb", ".gltf", ".bin")}
     assert len(before) == 3
     # A longer, bigger bake of the same shot name, stopped after its first frame.
     shot = out / "long.toml"
     shot.write_text(
-        SHOT.replace("@FLAP@", "0")
+        shot_text(0)
         .replace(f"count = {BEES}", "count = 3000")
         .replace(f"frames = [{FRAMES[0]}, {FRAMES[1]}]", "frames = [1, 2400]")
     )
@@ -274,6 +290,6 @@ def test_interrupted_bake_keeps_the_previous_glb(beeswarm_bin, tmp_path):
 
 
 def test_identical_bakes_are_byte_identical(baked, beeswarm_bin, tmp_path):
-    bake(beeswarm_bin, SHOT.replace("@FLAP@", str(baked["flap"])), tmp_path, "--format", "glb,gltf")
+    bake(beeswarm_bin, shot_text(baked["flap"], baked["layout"]), tmp_path, "--format", "glb,gltf")
     for name in ("gltf_test.glb", "gltf_test.gltf", "gltf_test.bin"):
         assert (tmp_path / name).read_bytes() == (baked["dir"] / name).read_bytes(), name

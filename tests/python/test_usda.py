@@ -1,12 +1,16 @@
 """The USDA PointInstancer cache, read back through usd-core (pxr).
 
-Bakes one small two-swarm shot with the release binary, once as a single layer and once
-split into value clips, then checks: every registered UsdValidation validator passes,
-the stage metadata, and that positions, orientations, velocities, pitch, roll and sway
-read through pxr equal the tracks CSV of the same bake.
+Bakes one small two-swarm shot with the release binary, once as a single layer, once
+split into value clips and once with flapping wings, then checks: every registered
+UsdValidation validator passes, the stage metadata, that positions, orientations,
+velocities, pitch, roll and sway read through pxr equal the tracks CSV of the same bake,
+the prototype's materials (and what Blender makes of them), and the wing flap.
 """
 import filecmp
+import json
+import os
 import subprocess
+import sys
 
 import pytest
 
@@ -21,11 +25,11 @@ FIRST, LAST = 3, 31
 CLIP_FRAMES = 7  # does not divide the 29 frames: the last clip is short
 
 
-def bake_usda(beeswarm_bin, clip_frames, out_dir):
-    bake(beeswarm_bin, shot_text(clip_frames), out_dir, "--format", "usda,csv")
+def bake_usda(beeswarm_bin, clip_frames, out_dir, wings="blur"):
+    bake(beeswarm_bin, shot_text(clip_frames, wings), out_dir, "--format", "usda,csv")
 
 
-def shot_text(clip_frames):
+def shot_text(clip_frames, wings="blur"):
     return f"""
 [scene]
 name = "usda_test"
@@ -51,16 +55,19 @@ position = [0.0, 1.0, 0.0]
 
 [output]
 usda_clip_frames = {clip_frames}
+wings = "{wings}"
 """
 
 
 @pytest.fixture(scope="module")
 def baked(beeswarm_bin, tmp_path_factory):
-    """{"single": dir, "clips": dir}, each holding usda_test.usda and the tracks CSV."""
+    """{"single": dir, "clips": dir, "flap": dir, "flap_clips": dir}, each holding
+    usda_test.usda and the tracks CSV (blurred wings, or flapping ones)."""
     out = {}
-    for mode, clip_frames in (("single", 0), ("clips", CLIP_FRAMES)):
+    for mode, clip_frames, wings in (("single", 0, "blur"), ("clips", CLIP_FRAMES, "blur"),
+                                     ("flap", 0, "flap"), ("flap_clips", CLIP_FRAMES, "flap")):
         d = tmp_path_factory.mktemp(mode)
-        bake_usda(beeswarm_bin, clip_frames, d)
+        bake_usda(beeswarm_bin, clip_frames, d, wings)
         out[mode] = d
     return out
 
@@ -80,7 +87,7 @@ def run_validators(stage):
     return [f"{e.GetName()}: {e.GetMessage()}" for e in errors if not e.HasNoError()]
 
 
-@pytest.mark.parametrize("mode", ["single", "clips"])
+@pytest.mark.parametrize("mode", ["single", "clips", "flap", "flap_clips"])
 def test_all_validators_pass(baked, mode):
     stage = open_stage(baked[mode])
     assert run_validators(stage) == []
@@ -114,7 +121,7 @@ def test_one_instancer_per_swarm_with_constant_instances(baked, mode):
         ids = list(pi.GetIdsAttr().Get())
         assert len(ids) == count and len(set(ids)) == count
         assert pi.GetIdsAttr().GetTypeName() == "int64[]"
-        assert list(pi.GetProtoIndicesAttr().Get()) == [0] * count
+        assert list(pi.GetProtoIndicesAttr().Get()) == [0] * count, "one prototype: wings blurred"
         (proto,) = pi.GetPrototypesRel().GetTargets()
         assert proto.HasPrefix(pi.GetPath())
         assert proto == pi.GetPath().AppendPath("Prototypes/honeybee")
@@ -150,14 +157,175 @@ def test_prototype_is_a_bee_at_real_scale(baked):
     size = hi - lo
     assert size[0] == pytest.approx(0.012, rel=1e-4), "12 mm long, along +X"
     assert size[1] < 0.005 and size[2] < 0.005
-    lo, hi = (np.array(v) for v in wing_r.GetExtentAttr().Get())
-    assert hi[2] > 0.008 and lo[2] > 0, "the right wing spans +Z"
-    lo, hi = (np.array(v) for v in wing_l.GetExtentAttr().Get())
-    assert lo[2] < -0.008 and hi[2] < 0, "the left wing spans -Z"
+    # Wings are placed at their hinges: bound them in the prototype's (body) frame.
+    cache = UsdGeom.BBoxCache(FIRST, [UsdGeom.Tokens.default_])
+    in_body = lambda mesh: cache.ComputeRelativeBound(mesh.GetPrim(), stage.GetPrimAtPath(proto)).ComputeAlignedRange()
+    box = in_body(wing_r)
+    assert box.GetMax()[2] > 0.008 and box.GetMin()[2] > 0, "the right wing spans +Z"
+    box = in_body(wing_l)
+    assert box.GetMin()[2] < -0.008 and box.GetMax()[2] < 0, "the left wing spans -Z"
     for mesh in (body, wing_l, wing_r):
         pts = np.array(mesh.GetPointsAttr().Get())
         assert np.allclose(UsdGeom.Boundable.ComputeExtentFromPlugins(mesh, 0), mesh.GetExtentAttr().Get())
         assert pts.shape[0] == max(mesh.GetFaceVertexIndicesAttr().Get()) + 1
+
+
+def bound_material(prim):
+    """The UsdPreviewSurface shader bound to a prim (or a subset)."""
+    from pxr import UsdShade
+    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    assert material, f"{prim.GetPath()} has no bound material"
+    shader = material.ComputeSurfaceSource()[0]
+    assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
+    return shader
+
+
+def test_prototype_has_materials_normals_and_bands(baked):
+    from pxr import UsdShade
+    stage = open_stage(baked["single"])
+    proto = stage.GetPrimAtPath("/usda_test/workers/Prototypes/honeybee")
+    body = UsdGeom.Mesh(proto.GetChild("body"))
+    subsets = UsdShade.MaterialBindingAPI(body).GetMaterialBindSubsets()
+    assert sorted(s.GetPrim().GetName() for s in subsets) == ["bee_black", "bee_yellow"]
+    assert UsdShade.MaterialBindingAPI(body).GetMaterialBindSubsetsFamilyType() == UsdGeom.Tokens.partition
+    faces = len(body.GetFaceVertexCountsAttr().Get())
+    covered = sorted(i for s in subsets for i in s.GetIndicesAttr().Get())
+    assert covered == list(range(faces)), "every face in exactly one band"
+    colours = {}
+    for s in subsets:
+        shader = bound_material(s.GetPrim())
+        colours[s.GetPrim().GetName()] = np.array(shader.GetInput("diffuseColor").Get())
+        assert shader.GetInput("opacity").Get() == 1.0
+        assert len(s.GetIndicesAttr().Get()) > faces // 5, "bands, not a speck"
+    assert colours["bee_yellow"][0] > colours["bee_yellow"][2] + 0.5, "warm yellow"
+    assert colours["bee_black"].max() < 0.1
+    for name in ("wing_l", "wing_r"):
+        wing = UsdGeom.Mesh(proto.GetChild(name))
+        assert wing.GetDoubleSidedAttr().Get()
+        assert bound_material(wing.GetPrim()).GetInput("opacity").Get() < 0.5
+    for mesh in (body, UsdGeom.Mesh(proto.GetChild("wing_r"))):
+        normals = np.array(mesh.GetNormalsAttr().Get())
+        assert mesh.GetNormalsInterpolation() == UsdGeom.Tokens.vertex
+        assert normals.shape == np.array(mesh.GetPointsAttr().Get()).shape
+        np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
+
+
+@pytest.mark.parametrize("mode", ["flap", "flap_clips"])
+def test_wings_flap_in_phase_groups(baked, mode):
+    """Eight prototypes whose wings turn about their hinges once per frame, each group
+    shifted by an eighth of a beat; bees pick theirs by id, so neighbours do not beat in
+    lockstep."""
+    stage = open_stage(baked[mode])
+    pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/usda_test/workers"))
+    protos = pi.GetPrototypesRel().GetTargets()
+    assert [p.name for p in protos] == [f"honeybee_{g}" for g in range(8)]
+    ids = list(pi.GetIdsAttr().Get())
+    assert list(pi.GetProtoIndicesAttr().Get()) == [i % 8 for i in ids]
+
+    def turn(proto, side, t):
+        wing = UsdGeom.Xformable(stage.GetPrimAtPath(proto.AppendChild(side)))
+        m = wing.GetLocalTransformation(t)
+        return np.degrees(np.arctan2(m[1][2], m[1][1]))  # rotation about X
+
+    for g, proto in enumerate(protos):
+        series = [turn(proto, "wing_r", t) for t in range(FIRST, LAST + 1)]
+        assert max(series) - min(series) > 60, f"group {g} flaps"
+        left = [turn(proto, "wing_l", t) for t in range(FIRST, LAST + 1)]
+        np.testing.assert_allclose(left, -np.array(series), atol=1e-3)  # mirror images
+    at = lambda g: [turn(protos[g], "wing_r", t) for t in range(FIRST, FIRST + 6)]
+    assert all(np.abs(np.array(at(0)) - np.array(at(g))).max() > 5 for g in range(1, 8))
+    # The geometry is written once and referenced by the other groups.
+    text = (baked[mode] / "usda_test.usda").read_text()
+    assert text.count('def Mesh "body"') == 2, "one per swarm"
+
+
+BLENDER_COLOURS = r"""
+import colorsys, json, sys
+import bpy
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.wm.usd_import(filepath=sys.argv[1])
+out = {}
+for o in bpy.data.objects:
+    if o.type != "MESH" or o.name.split(".")[0] not in ("body", "wing_l", "wing_r"):
+        continue
+    mats = []
+    for slot in o.material_slots:
+        m = slot.material
+        bsdf = next(n for n in m.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+        rgb = list(bsdf.inputs["Base Color"].default_value)[:3]
+        mats.append({"name": m.name, "rgb": rgb, "hsv": colorsys.rgb_to_hsv(*rgb),
+                     "alpha": bsdf.inputs["Alpha"].default_value,
+                     "method": getattr(m, "surface_render_method", m.blend_method)})
+    used = sorted({p.material_index for p in o.data.polygons})
+    out.setdefault(o.name.split(".")[0], []).append({"materials": mats, "used": used})
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_blender_shows_a_striped_bee_with_clear_wings(baked):
+    """Blender's USD importer turns the prototype's materials into a banded body (yellow
+    and near-black bands, both used) and see-through wings, as the glTF bee looks."""
+    import importlib.util
+
+    if importlib.util.find_spec("bpy") is None:
+        if os.environ.get("BEESWARM_REQUIRE_TOOLS") == "1":
+            pytest.fail("bpy is required here (BEESWARM_REQUIRE_TOOLS=1) but missing")
+        pytest.skip("bpy (Blender as a Python module) is not available")
+    run = subprocess.run([sys.executable, "-c", BLENDER_COLOURS, str(baked["single"] / "usda_test.usda")],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-4000:]
+    got = json.loads(next(l for l in run.stdout.splitlines() if l.startswith("RESULT "))[7:])
+    assert sorted(got) == ["body", "wing_l", "wing_r"]
+    for body in got["body"]:  # one per swarm's prototype
+        by_hue = sorted(body["materials"], key=lambda m: m["hsv"][2])
+        dark, yellow = by_hue[0], by_hue[-1]
+        assert len(body["materials"]) == 2 and body["used"] == [0, 1], "two bands, both drawn"
+        h, s_, v = yellow["hsv"]
+        assert 25 / 360 < h < 60 / 360 and s_ > 0.7 and v > 0.5, f"yellow-brown body: {yellow}"
+        assert dark["hsv"][2] < 0.1, f"dark stripes: {dark}"
+        assert yellow["alpha"] == 1.0 and dark["alpha"] == 1.0
+    for side in ("wing_l", "wing_r"):
+        for wing in got[side]:
+            (m,) = wing["materials"]
+            assert m["alpha"] < 1.0, f"translucent wings: {m}"
+            assert m["method"] in ("BLENDED", "BLEND"), m
+
+
+BLENDER_FLAP = r"""
+import json, sys
+import bpy
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.wm.usd_import(filepath=sys.argv[1])
+scene = bpy.context.scene
+wings = sorted((o for o in bpy.data.objects if o.name.split(".")[0] == "wing_r"), key=lambda o: o.name)
+out = {"constraints": [[c.type for c in o.constraints] for o in wings], "angles": []}
+for f in range(int(sys.argv[2]), int(sys.argv[2]) + 6):
+    scene.frame_set(f)
+    out["angles"].append([o.matrix_local.to_euler()[0] for o in wings])
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_blender_flaps_the_usd_wings(baked):
+    """Blender plays the prototypes' wing turns (a Transform Cache per wing object): the
+    angle changes from frame to frame and differs between the phase groups."""
+    import importlib.util
+
+    if importlib.util.find_spec("bpy") is None:
+        if os.environ.get("BEESWARM_REQUIRE_TOOLS") == "1":
+            pytest.fail("bpy is required here (BEESWARM_REQUIRE_TOOLS=1) but missing")
+        pytest.skip("bpy (Blender as a Python module) is not available")
+    run = subprocess.run([sys.executable, "-c", BLENDER_FLAP, str(baked["flap"] / "usda_test.usda"), str(FIRST)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-4000:]
+    got = json.loads(next(l for l in run.stdout.splitlines() if l.startswith("RESULT "))[7:])
+    assert len(got["constraints"]) == 2 * 8, "eight prototypes per swarm"
+    assert all("TRANSFORM_CACHE" in c for c in got["constraints"])
+    a = np.array(got["angles"])  # frames × wings
+    assert (np.ptp(a, axis=0) > 0.5).all(), "every wing turns over six frames"
+    assert (np.ptp(a[:, :8], axis=1) > 0.5).all(), "the groups are out of phase at every frame"
 
 
 @pytest.mark.parametrize("mode", ["single", "clips"])

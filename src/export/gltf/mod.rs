@@ -1,23 +1,32 @@
 //! glTF 2.0 cache: `.glb`, or `.gltf` with its `.bin` beside it.
 //!
-//! Scene: one root node per swarm (named after it), one node per agent under it, and under
-//! that one node per part of the swarm's species (`species::Species`), named
-//! `<agent>_<part>`. For the honeybee:
+//! Scene: one root node per swarm (named after it), one node per agent under it. Two
+//! layouts (`[output] gltf_layout`). **parts** (the default): under each agent node one node
+//! per part of the swarm's species (`species::Species`), named `<agent>_<part>`. For the
+//! honeybee:
 //!
 //! ```text
 //! bee_000123            translation = position − heading·(0,0,sway), rotation = heading
 //! └─ bee_000123_body    translation = (0,0,sway), rotation = Rz(pitch)·Rx(roll), scale,
 //!    │                  mesh = the striped body                          (Drive::Attitude)
-//!    ├─ bee_000123_wing_l   hinge on the thorax, flapping rotation (or a static blur pose)
-//!    └─ bee_000123_wing_r                                                (Drive::Flap)
+//!    ├─ bee_000123_wing_l   hinge on the thorax: still, blur fan or flapping (Drive::Flap)
+//!    └─ bee_000123_wing_r
 //! ```
 //!
 //! so an animator reads the path on the agent node and the body motion on its child, and
 //! the body node's world transform is exactly the simulated pose (its world position is
 //! the tracks CSV position). The lateral offset (sway) is the channel the species names in
 //! `lateral_offset`; a part with `Drive::Channel` gets a rotation track turning it about
-//! its axis by the channel's value in degrees. Every track is LINEAR and keyed once per
-//! frame on one shared time accessor, `(frame − start) / fps` seconds.
+//! its axis by the channel's value in degrees.
+//!
+//! **agent**: the agent node holds the simulated pose itself (translation = position,
+//! rotation = orientation, scale) and one mesh of every part that does not move on its
+//! own, posed at rest; only moving parts (flapping wings, channel-driven parts) get child
+//! nodes. One animated node per bee unless the wings flap: what DCC importers, whose time
+//! grows with animated nodes, load fastest.
+//!
+//! Every track is LINEAR and keyed once per frame on one shared time accessor,
+//! `(frame − start) / fps` seconds. Wings are drawn as `export::wings` says, like USD.
 //!
 //! Memory: the buffer wants each bee's history contiguous (node-major) but frames arrive
 //! one at a time (frame-major). Each frame's keys are appended to a scratch file as they
@@ -25,7 +34,8 @@
 //! plus one bounded block buffer, whatever the shot length. The JSON (about 1.5 kB per
 //! bee) is the part that grows with the bee count.
 
-use super::{CacheWriter, OutputOptions};
+use super::wings::{self, WingDisplay};
+use super::{CacheWriter, GltfLayout, OutputOptions};
 use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame};
@@ -46,17 +56,6 @@ pub enum Container {
     /// `<shot>.gltf` JSON plus `<shot>.bin` beside it.
     Gltf,
 }
-
-/// Wing stroke, degrees: the wing swings about the body X axis (the hinge line) by
-/// `WING_MID ± WING_AMPLITUDE`, positive raising the tip. The blurred pose is `WING_MID`.
-const WING_MID_DEG: f32 = 15.0;
-const WING_AMPLITUDE_DEG: f32 = 50.0;
-/// Bees flap in this many phase groups (by id) so a swarm does not beat in lockstep,
-/// while wing tracks stay shared: one pair of accessors per group, not per bee.
-const WING_PHASES: u64 = 8;
-/// Wing opacity: a visible flap shows the membrane, a blur is mostly see-through.
-const WING_ALPHA_FLAP: f32 = 0.45;
-const WING_ALPHA_BLUR: f32 = 0.18;
 
 /// Floats spilled per agent per frame: agent translation (3), agent rotation (4), lateral
 /// offset (1), body rotation (4), scale (1). Stored little-endian, exactly the bytes the
@@ -98,19 +97,6 @@ pub fn same_hemisphere(prev: Quat, q: Quat) -> Quat {
 /// The first key of a track: `w ≥ 0`, purely for tidy, predictable files.
 fn canonical(q: Quat) -> Quat {
     if q.w < 0.0 { -q } else { q }
-}
-
-/// Rotation of a wing raised by `up_deg` (tip up). The right wing's tip is +Z, so raising
-/// it is a negative turn about +X; the left wing mirrors it.
-pub fn wing_rotation(up_deg: f32, right: bool) -> Quat {
-    let a = up_deg.to_radians();
-    Quat::from_rotation_x(if right { -a } else { a })
-}
-
-/// Wing elevation in degrees at time `t` for phase group `group`.
-fn wing_angle(flap_hz: f64, t: f64, group: u64) -> f32 {
-    let phase = std::f64::consts::TAU * (flap_hz * t + group as f64 / WING_PHASES as f64);
-    WING_MID_DEG + WING_AMPLITUDE_DEG * phase.sin() as f32
 }
 
 /// Rotation of a part driven by a channel: `deg` degrees about `axis`.
@@ -163,7 +149,8 @@ pub struct GltfWriter {
     /// `.glb` or `.gltf` destination.
     dest: PathBuf,
     meta: CacheMeta,
-    flap_hz: f64,
+    wings: WingDisplay,
+    layout: GltfLayout,
     spill: Option<BufWriter<File>>,
     scratch: ScratchFile,
     /// Bee ids per swarm, from the first frame; every later frame must match.
@@ -186,7 +173,7 @@ impl GltfWriter {
         meta: &CacheMeta,
         opts: &OutputOptions,
     ) -> Result<Self> {
-        let flap_hz = opts.gltf_wing_flap_hz;
+        let flap_hz = opts.wings.flap_hz();
         if !(meta.fps.is_finite() && meta.fps > 0.0) {
             return Err(Error::input(format!(
                 "fps must be positive, got {}",
@@ -195,7 +182,7 @@ impl GltfWriter {
         }
         if !(flap_hz.is_finite() && (0.0..=meta.fps / 2.0).contains(&flap_hz)) {
             return Err(Error::input(format!(
-                "output.wing_flap_hz = {flap_hz}: must be from 0 (blurred wings) to half \
+                "output.wing_flap_hz = {flap_hz}: must be above 0 and at most half \
                  the frame rate ({}), or the flap aliases",
                 meta.fps / 2.0
             )));
@@ -235,6 +222,19 @@ impl GltfWriter {
                     _ => None,
                 })
                 .collect();
+            if opts.gltf_layout == GltfLayout::Agent {
+                let offsets: Vec<Vec3> = (s.species.meshes)(s.body_length_m)
+                    .iter()
+                    .map(|pm| pm.offset)
+                    .collect();
+                agent_parts(s.species, opts.wings, &offsets).map_err(|part| {
+                    Error::input(format!(
+                        "swarm {}: species {} animates part {part} under a part posed at \
+                         rest, which output.gltf_layout = \"agent\" cannot draw; use \"parts\"",
+                        s.name, s.species.name
+                    ))
+                })?;
+            }
             plans.push(SwarmPlan {
                 lateral: s.lateral_offset(),
                 driven,
@@ -251,7 +251,8 @@ impl GltfWriter {
             container,
             dest: path.to_path_buf(),
             meta: meta.clone(),
-            flap_hz,
+            wings: opts.wings,
+            layout: opts.gltf_layout,
             spill: Some(BufWriter::with_capacity(1 << 20, file)),
             scratch,
             ids: Vec::new(),
@@ -297,8 +298,16 @@ impl CacheWriter for GltfWriter {
             let plan = &self.plans[si];
             for i in 0..n {
                 let lateral = s.channel_or_zero(plan.lateral, i);
-                let (bee_t, bee_r, body_r) =
-                    split_pose(s.position[i], s.heading[i], s.orientation[i], lateral);
+                // The agent layout's one node holds the simulated pose itself (in the slots
+                // of the path node's translation and rotation).
+                let (bee_t, bee_r, body_r) = match self.layout {
+                    GltfLayout::Parts => {
+                        split_pose(s.position[i], s.heading[i], s.orientation[i], lateral)
+                    }
+                    GltfLayout::Agent => {
+                        (s.position[i], s.orientation[i].normalize(), Quat::IDENTITY)
+                    }
+                };
                 let scale = s.scale[i];
                 let driven = plan.driven.iter().map(|&(_, c, _)| s.channels[c][i]);
                 let finite = bee_t.is_finite()
@@ -421,10 +430,89 @@ struct Layout {
     total: u64,
 }
 
-/// Bytes of one agent's tracks: agent T, agent R, body T, body R, body S if it varies,
-/// then one rotation per channel-driven part.
-fn bee_bytes(frames: usize, scale_varies: bool, driven: usize) -> usize {
-    frames * (12 + 16 + 12 + 16 + if scale_varies { 12 } else { 0 } + 16 * driven)
+/// Bytes of one agent's tracks: agent T, agent R, then (parts layout) body T and body R,
+/// then S if it varies (body S, or the agent's in the agent layout), then one rotation per
+/// channel-driven part.
+fn bee_bytes(layout: GltfLayout, frames: usize, scale_varies: bool, driven: usize) -> usize {
+    let body = if layout == GltfLayout::Parts {
+        12 + 16
+    } else {
+        0
+    };
+    frames * (12 + 16 + body + if scale_varies { 12 } else { 0 } + 16 * driven)
+}
+
+/// Byte offsets (per frame) in an agent's tracks: (scale, first driven rotation).
+fn bee_offsets(layout: GltfLayout, scale_varies: bool) -> (usize, usize) {
+    let scale = if layout == GltfLayout::Parts { 56 } else { 28 };
+    (scale, scale + if scale_varies { 12 } else { 0 })
+}
+
+/// Whether a part moves on its own under a wing display (gets its own animated node).
+fn moves(drive: Drive, display: WingDisplay) -> bool {
+    match drive {
+        Drive::Attitude | Drive::Static => false,
+        Drive::Flap { .. } => matches!(display, WingDisplay::Flap { .. }),
+        Drive::Channel { .. } => true,
+    }
+}
+
+/// How the agent layout draws one part.
+#[derive(Clone, Copy, Debug)]
+struct AgentPart {
+    /// In the agent node's one mesh, posed at rest; else a node of its own.
+    merged: bool,
+    /// Merged: the part's rest transform in the agent frame. A node of its own under a
+    /// merged parent: its translation in the agent frame. Else: its offset.
+    rotation: Quat,
+    translation: Vec3,
+}
+
+/// The agent layout of a species for a wing display; `Err(part)` names a moving part whose
+/// merged parent is turned at rest (a rotation track would replace that turn), or an
+/// attitude part under a moving one.
+fn agent_parts(
+    sp: &Species,
+    display: WingDisplay,
+    offsets: &[Vec3],
+) -> std::result::Result<Vec<AgentPart>, &'static str> {
+    let mut out: Vec<AgentPart> = Vec::with_capacity(sp.parts.len());
+    for (k, part) in sp.parts.iter().enumerate() {
+        let parent = part.parent.map(|p| out[p]);
+        let (pr, pt) = match parent {
+            None => (Quat::IDENTITY, Vec3::ZERO),
+            Some(p) if p.merged => (p.rotation, p.translation),
+            // The attitude part holds the agent's pose: it cannot hang off a moving part.
+            Some(_) if part.drive == Drive::Attitude => return Err(part.name),
+            Some(_) => {
+                out.push(AgentPart {
+                    merged: false,
+                    rotation: Quat::IDENTITY,
+                    translation: offsets[k],
+                });
+                continue;
+            }
+        };
+        let (own_r, own_t) = match part.drive {
+            // The attitude part sits at the agent's centre, whatever its offset.
+            Drive::Attitude => (Quat::IDENTITY, Vec3::ZERO),
+            Drive::Flap { right } => (
+                wings::rotation(wings::rest_up_deg(display, 0), right),
+                offsets[k],
+            ),
+            Drive::Static | Drive::Channel { .. } => (Quat::IDENTITY, offsets[k]),
+        };
+        let merged = !moves(part.drive, display);
+        if !merged && !pr.abs_diff_eq(Quat::IDENTITY, 1e-7) {
+            return Err(part.name);
+        }
+        out.push(AgentPart {
+            merged,
+            rotation: if merged { pr * own_r } else { Quat::IDENTITY },
+            translation: pr * own_t + pt,
+        });
+    }
+    Ok(out)
 }
 
 fn pad4(v: &mut Vec<u8>, fill: u8) {
@@ -510,7 +598,9 @@ impl Layout {
             "frame_end": meta.frame_end,
             "seed": meta.seed,
             "tool_version": meta.tool_version,
-            "wing_flap_hz": w.flap_hz,
+            "wings": w.wings.name(),
+            "wing_flap_hz": w.wings.flap_hz(),
+            "gltf_layout": w.layout.name(),
             "units": "metres",
             "up_axis": "Y",
         });
@@ -551,11 +641,7 @@ impl Layout {
 
         // Materials of every species in the shot, in order of first appearance, shared by
         // every mesh (a material name already pushed is reused).
-        let wing_alpha = if w.flap_hz > 0.0 {
-            WING_ALPHA_FLAP
-        } else {
-            WING_ALPHA_BLUR
-        };
+        let wing_alpha = wings::alpha(w.wings);
         let mut material_names: Vec<&str> = Vec::new();
         let mut species_materials: Vec<(&str, Vec<Index<json::Material>>)> = Vec::new();
         for s in &meta.swarms {
@@ -584,10 +670,13 @@ impl Layout {
         struct MeshSet {
             species: &'static str,
             length_bits: u32,
-            /// Per part: its mesh, if it has one.
+            /// Per part: its mesh, if it has one (and, in the agent layout, a node).
             meshes: Vec<Option<Index<json::Mesh>>>,
             /// Per part: its rest translation in its parent's frame.
             offsets: Vec<Vec3>,
+            /// Agent layout: how each part is drawn, and the agent node's mesh.
+            agent: Vec<AgentPart>,
+            agent_mesh: Option<Index<json::Mesh>>,
         }
         let mut sets: Vec<MeshSet> = Vec::new();
         let mut swarm_set = Vec::new();
@@ -606,7 +695,15 @@ impl Layout {
                 .find(|(n, _)| *n == sp.name)
                 .expect("materials of every species")
                 .1;
-            let part_meshes = (sp.meshes)(s.body_length_m);
+            let mut part_meshes = (sp.meshes)(s.body_length_m);
+            // The wings a display draws: the blur bakes its fan into the wing mesh.
+            for (part, pm) in sp.parts.iter().zip(&mut part_meshes) {
+                if let Drive::Flap { right } = part.drive {
+                    for (p, _) in &mut pm.primitives {
+                        *p = wings::mesh(p, w.wings, right);
+                    }
+                }
+            }
             assert_eq!(
                 part_meshes.len(),
                 sp.parts.len(),
@@ -657,33 +754,66 @@ impl Layout {
                     }
                 };
             let tag = format!("{}_{}mm", sp.agent, fmt_mm(s.body_length_m));
-            let mut meshes = Vec::new();
-            let mut offsets = Vec::new();
-            for (part, pm) in sp.parts.iter().zip(&part_meshes) {
-                offsets.push(pm.offset);
-                if pm.primitives.is_empty() {
-                    meshes.push(None);
-                    continue;
+            let offsets: Vec<Vec3> = part_meshes.iter().map(|pm| pm.offset).collect();
+            let agent = match w.layout {
+                GltfLayout::Agent => {
+                    agent_parts(sp, w.wings, &offsets).expect("checked when the writer was made")
                 }
-                let primitives = pm
-                    .primitives
+                GltfLayout::Parts => Vec::new(),
+            };
+            let mesh = |root: &mut Root,
+                        head: &mut Vec<u8>,
+                        name: String,
+                        prims: &[(Primitive, usize)]| {
+                let primitives = prims
                     .iter()
-                    .map(|(p, m)| prim(&mut root, &mut head, p, mats[*m]))
+                    .map(|(p, m)| prim(root, head, p, mats[*m]))
                     .collect();
-                meshes.push(Some(root.push(json::Mesh {
-                    name: Some(format!("{tag}_{}", part.name)),
+                root.push(json::Mesh {
+                    name: Some(name),
                     primitives,
                     extensions: None,
                     extras: None,
                     weights: None,
-                })));
+                })
+            };
+            let mut meshes = Vec::new();
+            for (k, (part, pm)) in sp.parts.iter().zip(&part_meshes).enumerate() {
+                let in_agent_mesh = agent.get(k).is_some_and(|a| a.merged);
+                meshes.push((!pm.primitives.is_empty() && !in_agent_mesh).then(|| {
+                    mesh(
+                        &mut root,
+                        &mut head,
+                        format!("{tag}_{}", part.name),
+                        &pm.primitives,
+                    )
+                }));
             }
+            // The agent layout's one mesh: every merged part posed in the agent frame, one
+            // primitive per material (fewer primitives import faster).
+            let mut merged: Vec<(Primitive, usize)> = Vec::new();
+            for (a, pm) in agent.iter().zip(&part_meshes) {
+                if !a.merged {
+                    continue;
+                }
+                for (p, m) in &pm.primitives {
+                    let posed = p.transformed(a.rotation, a.translation);
+                    match merged.iter_mut().find(|(_, mm)| mm == m) {
+                        Some((acc, _)) => acc.extend(&posed),
+                        None => merged.push((posed, *m)),
+                    }
+                }
+            }
+            let agent_mesh =
+                (!merged.is_empty()).then(|| mesh(&mut root, &mut head, tag.clone(), &merged));
             swarm_set.push(sets.len());
             sets.push(MeshSet {
                 species: sp.name,
                 length_bits: bits,
                 meshes,
                 offsets,
+                agent,
+                agent_mesh,
             });
         }
 
@@ -712,26 +842,27 @@ impl Layout {
                 .iter()
                 .any(|p| matches!(p.drive, Drive::Flap { .. }))
         };
-        let flapping = animated && w.flap_hz > 0.0 && meta.swarms.iter().any(flaps);
+        let flap_hz = w.wings.flap_hz();
+        let flapping = animated && flap_hz > 0.0 && meta.swarms.iter().any(flaps);
         let mut wing_tracks: Vec<Option<(Index<json::Accessor>, Index<json::Accessor>)>> =
-            vec![None; WING_PHASES as usize];
+            vec![None; wings::PHASES as usize];
         if flapping {
-            let mut used = [false; WING_PHASES as usize];
+            let mut used = [false; wings::PHASES as usize];
             // Only the groups of agents with flapping parts: no unused accessor.
             for (ids, s) in w.ids.iter().zip(&meta.swarms) {
                 if flaps(s) {
-                    for id in ids {
-                        used[(id % WING_PHASES) as usize] = true;
+                    for &id in ids {
+                        used[wings::group(id)] = true;
                     }
                 }
             }
-            let groups: Vec<u64> = (0..WING_PHASES).filter(|&g| used[g as usize]).collect();
+            let groups: Vec<usize> = (0..wings::PHASES as usize).filter(|&g| used[g]).collect();
             let mut bytes = Vec::new();
             for &g in &groups {
                 for right in [false, true] {
                     for k in 0..frames {
                         let t = k as f64 / meta.fps;
-                        let q = wing_rotation(wing_angle(w.flap_hz, t, g), right);
+                        let q = wings::rotation(wings::angle(flap_hz, t, g), right);
                         bytes.extend(f32_bytes(q.to_array()));
                     }
                 }
@@ -741,9 +872,10 @@ impl Layout {
                 let track = |side: usize| (slot * 2 + side) * frames * 16;
                 let l = root.push(accessor(wv, track(0), frames, F32, Type::Vec4));
                 let r = root.push(accessor(wv, track(1), frames, F32, Type::Vec4));
-                wing_tracks[g as usize] = Some((l, r));
+                wing_tracks[g] = Some((l, r));
             }
         }
+        let agent_layout = w.layout == GltfLayout::Agent;
 
         // Bees: one buffer view per bee holding its tracks back to back.
         let mut offset = head.len() as u64;
@@ -786,11 +918,18 @@ impl Layout {
             let swarm_root = root.push(node(s.name.clone()));
             scene_nodes.push(swarm_root);
             let mut children = Vec::new();
+            // Each part's node, counted from the agent node (None: in the agent mesh).
+            let mut slots: Vec<Option<usize>> = Vec::new();
+            for k in 0..sp.parts.len() {
+                let merged = agent_layout && set.agent[k].merged;
+                let next = 1 + slots.iter().flatten().count();
+                slots.push((!merged).then_some(next));
+            }
             for &id in &w.ids[si] {
                 let st = &w.bees[g];
                 let f = &st.first;
                 g += 1;
-                let size = bee_bytes(frames, st.scale_varies, plan.driven.len());
+                let size = bee_bytes(w.layout, frames, st.scale_varies, plan.driven.len());
                 let bv = root.push(json::buffer::View {
                     buffer,
                     byte_length: USize64(size as u64),
@@ -804,12 +943,17 @@ impl Layout {
                 offset += size as u64;
                 let bee_t = root.push(accessor(bv, 0, frames, F32, Type::Vec3));
                 let bee_r = root.push(accessor(bv, frames * 12, frames, F32, Type::Vec4));
-                let body_t = root.push(accessor(bv, frames * 28, frames, F32, Type::Vec3));
-                let body_r = root.push(accessor(bv, frames * 40, frames, F32, Type::Vec4));
+                let body_tr = (!agent_layout).then(|| {
+                    (
+                        root.push(accessor(bv, frames * 28, frames, F32, Type::Vec3)),
+                        root.push(accessor(bv, frames * 40, frames, F32, Type::Vec4)),
+                    )
+                });
+                let (scale_at, driven_at) = bee_offsets(w.layout, st.scale_varies);
                 let body_s = st
                     .scale_varies
-                    .then(|| root.push(accessor(bv, frames * 56, frames, F32, Type::Vec3)));
-                let driven_at = frames * if st.scale_varies { 68 } else { 56 };
+                    .then(|| root.push(accessor(bv, frames * scale_at, frames, F32, Type::Vec3)));
+                let driven_at = frames * driven_at;
                 let driven_r: Vec<Index<json::Accessor>> = (0..plan.driven.len())
                     .map(|j| {
                         let at = driven_at + j * frames * 16;
@@ -818,22 +962,28 @@ impl Layout {
                     .collect();
 
                 let name = agent_name(sp, id);
-                let group = (id % WING_PHASES) as usize;
+                let group = wings::group(id);
                 let wing_pose = |right: bool| {
-                    let up = if flapping {
-                        wing_angle(w.flap_hz, 0.0, group as u64)
-                    } else {
-                        WING_MID_DEG
-                    };
-                    json::scene::UnitQuaternion(wing_rotation(up, right).to_array())
+                    let up = wings::rest_up_deg(w.wings, group);
+                    json::scene::UnitQuaternion(wings::rotation(up, right).to_array())
                 };
                 // Parents before children in the node list, so the document reads top-down:
-                // the agent node, then one node per part in part order.
+                // the agent node, then one node per part (that has one) in part order.
                 let base = root.nodes.len();
                 let at = |k: usize| Index::<json::Node>::new((base + k) as u32);
-                let part_node = |k: usize| at(1 + k);
+                let part_node = |k: usize| at(slots[k].expect("a part with a node"));
+                // The agent node's children: parts with a node under no part with one.
                 let kids = |parent: Option<usize>| {
-                    let v: Vec<_> = sp.children(parent).map(part_node).collect();
+                    let v: Vec<_> = (0..sp.parts.len())
+                        .filter(|&k| {
+                            slots[k].is_some()
+                                && match parent {
+                                    None => sp.parts[k].parent.is_none_or(|p| slots[p].is_none()),
+                                    Some(p) => sp.parts[k].parent == Some(p),
+                                }
+                        })
+                        .map(part_node)
+                        .collect();
                     (!v.is_empty()).then_some(v)
                 };
                 let bee = at(0);
@@ -841,10 +991,19 @@ impl Layout {
                     children: kids(None),
                     translation: Some([f[0], f[1], f[2]]),
                     rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
+                    scale: (agent_layout && f[12] != 1.0).then_some([f[12]; 3]),
+                    mesh: if agent_layout { set.agent_mesh } else { None },
                     ..node(name.clone())
                 });
                 for (k, part) in sp.parts.iter().enumerate() {
-                    let o = set.offsets[k];
+                    if slots[k].is_none() {
+                        continue;
+                    }
+                    let o = if agent_layout {
+                        set.agent[k].translation
+                    } else {
+                        set.offsets[k]
+                    };
                     let base = json::Node {
                         mesh: set.meshes[k],
                         children: kids(Some(k)),
@@ -885,10 +1044,17 @@ impl Layout {
                 children.push(bee);
                 track(&mut samplers, &mut channels, bee, bee_t, Translation);
                 track(&mut samplers, &mut channels, bee, bee_r, Rotation);
+                if let (true, Some(s)) = (agent_layout, body_s) {
+                    track(&mut samplers, &mut channels, bee, s, Scale);
+                }
                 for (k, part) in sp.parts.iter().enumerate() {
+                    if slots[k].is_none() {
+                        continue;
+                    }
                     let pn = part_node(k);
                     match part.drive {
                         Drive::Attitude => {
+                            let (body_t, body_r) = body_tr.expect("parts layout");
                             track(&mut samplers, &mut channels, pn, body_t, Translation);
                             track(&mut samplers, &mut channels, pn, body_r, Rotation);
                             if let Some(body_s) = body_s {
@@ -979,12 +1145,14 @@ fn write_bin(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()
             for f in 0..frames {
                 track.extend_from_slice(&rec(f)[12..28]); // bee rotation
             }
-            for f in 0..frames {
-                track.extend_from_slice(&[0; 8]); // body translation (0, 0, sway)
-                track.extend_from_slice(&rec(f)[28..32]);
-            }
-            for f in 0..frames {
-                track.extend_from_slice(&rec(f)[32..48]); // body rotation
+            if w.layout == GltfLayout::Parts {
+                for f in 0..frames {
+                    track.extend_from_slice(&[0; 8]); // body translation (0, 0, sway)
+                    track.extend_from_slice(&rec(f)[28..32]);
+                }
+                for f in 0..frames {
+                    track.extend_from_slice(&rec(f)[32..48]); // body rotation
+                }
             }
             let st = &w.bees[b0 + b];
             if st.scale_varies {

@@ -75,9 +75,19 @@ fn synth(meta: &CacheMeta, frame: i32, varying_scale: bool) -> Vec<SwarmFrame> {
         .collect()
 }
 
+/// Options of a bake: wings flapping at `flap_hz`, or blurred for 0.
 fn opts(flap_hz: f64) -> OutputOptions {
+    layout_opts(flap_hz, GltfLayout::Parts)
+}
+
+fn layout_opts(flap_hz: f64, layout: GltfLayout) -> OutputOptions {
     OutputOptions {
-        gltf_wing_flap_hz: flap_hz,
+        wings: if flap_hz > 0.0 {
+            WingDisplay::Flap { hz: flap_hz }
+        } else {
+            WingDisplay::Blur
+        },
+        gltf_layout: layout,
         ..Default::default()
     }
 }
@@ -85,6 +95,7 @@ fn opts(flap_hz: f64) -> OutputOptions {
 struct Bake {
     meta: CacheMeta,
     flap_hz: f64,
+    layout: GltfLayout,
     varying_scale: bool,
     budget: usize,
 }
@@ -94,6 +105,7 @@ impl Bake {
         Bake {
             meta,
             flap_hz: 0.0,
+            layout: GltfLayout::Parts,
             varying_scale: false,
             budget: TRANSPOSE_BUDGET_BYTES,
         }
@@ -104,7 +116,13 @@ impl Bake {
             Container::Gltf => "gltf",
         };
         let path = dir.join(format!("{}.{ext}", self.meta.shot_name));
-        let mut w = GltfWriter::create(container, &path, &self.meta, &opts(self.flap_hz)).unwrap();
+        let mut w = GltfWriter::create(
+            container,
+            &path,
+            &self.meta,
+            &layout_opts(self.flap_hz, self.layout),
+        )
+        .unwrap();
         w.transpose_budget = self.budget;
         let mut w: Box<dyn CacheWriter> = Box::new(w);
         for f in self.meta.frame_start..=self.meta.frame_end {
@@ -224,6 +242,91 @@ fn names_in(dir: &Path) -> Vec<String> {
         .collect();
     v.sort();
     v
+}
+
+#[test]
+fn agent_layout_is_one_animated_node_per_bee_holding_the_simulated_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = meta(&[("bees", 5, 0.012), ("drones", 3, 0.015)], 10, 33);
+    let mut b = Bake::new(m.clone());
+    b.layout = GltfLayout::Agent;
+    b.varying_scale = true;
+    let doc = read(&b.run(Container::Glb, dir.path())[0]);
+    let r = &doc.root;
+    // Swarm roots, then one node per bee: no part nodes while the wings do not flap.
+    assert_eq!(r.nodes.len(), 2 + 8);
+    // One mesh per bee length, one primitive per material (yellow, black, wing fan).
+    assert_eq!(r.meshes.len(), 2);
+    assert_eq!(r.meshes[0].name.as_deref(), Some("bee_12mm"));
+    assert_eq!(r.meshes[0].primitives.len(), 3);
+    let anim = &r.animations[0];
+    let animated: std::collections::BTreeSet<_> =
+        anim.channels.iter().map(|c| c.target.node).collect();
+    assert_eq!(animated.len(), 8);
+    // T and R for every bee, S for the one whose scale changes (bee 0 of each swarm).
+    assert_eq!(anim.channels.len(), 8 * 2 + 2);
+    for f in m.frame_start..=m.frame_end {
+        let k = (f - m.frame_start) as usize;
+        for s in synth(&m, f, true) {
+            for i in 0..s.len() {
+                let bee = doc.node(&bee_name(s.ids[i]));
+                let t = doc.vec3s(doc.track(bee, Property::Translation).unwrap().1)[k];
+                let q = doc.quats(doc.track(bee, Property::Rotation).unwrap().1)[k];
+                assert_eq!(t, s.position[i], "the tracks CSV position, exactly");
+                assert!(q.dot(s.orientation[i]).abs() > 1.0 - 1e-6);
+                let node = &r.nodes[bee.value()];
+                assert!(node.children.is_none() && node.mesh.is_some());
+            }
+        }
+    }
+}
+
+#[test]
+fn agent_layout_with_flapping_wings_animates_only_the_wings_besides_the_bee() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = meta(&[("bees", 4, 0.012)], 1, 12);
+    let mut b = Bake::new(m);
+    b.layout = GltfLayout::Agent;
+    b.flap_hz = 4.0;
+    let parts = read(&b.run(Container::Glb, dir.path())[0]);
+    let r = &parts.root;
+    let bee = &r.nodes[parts.node(&bee_name(100)).value()];
+    let kids: Vec<_> = bee
+        .children
+        .clone()
+        .unwrap()
+        .iter()
+        .map(|k| r.nodes[k.value()].name.clone().unwrap())
+        .collect();
+    assert_eq!(
+        kids,
+        [
+            format!("{}_wing_l", bee_name(100)),
+            format!("{}_wing_r", bee_name(100))
+        ]
+    );
+    // The body alone in the bee's mesh (yellow and black bands).
+    assert_eq!(r.meshes[bee.mesh.unwrap().value()].primitives.len(), 2);
+    let wing = parts.node(&format!("{}_wing_r", bee_name(100)));
+    // Hinged where the parts layout hinges it on the body (the body sits at the centre).
+    let hinge = crate::species::honeybee::BeeMesh::new(0.012).wing_hinge_right;
+    assert_eq!(r.nodes[wing.value()].translation, Some(hinge.to_array()));
+    let q = parts.quats(parts.track(wing, Property::Rotation).unwrap().1);
+    let up: Vec<f32> = q
+        .iter()
+        .map(|q| -2.0 * q.x.atan2(q.w).to_degrees())
+        .collect();
+    for (k, u) in up.iter().enumerate() {
+        let want = wings::angle(4.0, k as f64 / FPS, wings::group(100));
+        assert!((u - want).abs() < 1e-3, "{u} vs {want}");
+    }
+    // Bee, wing_l, wing_r animated per bee.
+    let animated: std::collections::BTreeSet<_> = r.animations[0]
+        .channels
+        .iter()
+        .map(|c| c.target.node)
+        .collect();
+    assert_eq!(animated.len(), 4 * 3);
 }
 
 #[test]
@@ -408,13 +511,22 @@ fn node_hierarchy_swarm_bee_body_wings() {
     // Blurred by default: no wing tracks, a very transparent membrane, wings at mid-stroke.
     assert_eq!(
         wing_mat.pbr_metallic_roughness.base_color_factor.0[3],
-        WING_ALPHA_BLUR
+        wings::ALPHA_BLUR
     );
     let anim = &r.animations[0];
     assert_eq!(anim.channels.len(), 6 * 4);
     let wing = &r.nodes[doc.node(&format!("{}_wing_r", bee_name(100))).value()];
     let q = Quat::from_array(wing.rotation.as_ref().unwrap().0);
-    assert!(q.dot(wing_rotation(WING_MID_DEG, true)) > 1.0 - 1e-6);
+    // The blur's fan spans the stroke in the mesh: the wing node itself is not turned.
+    assert!(q.dot(Quat::IDENTITY) > 1.0 - 1e-6);
+    let fan = &r.accessors[r.meshes[wing.mesh.unwrap().value()].primitives[0].attributes
+        [&Valid(json::mesh::Semantic::Positions)]
+        .value()];
+    let one_wing = crate::species::honeybee::BeeMesh::new(0.012)
+        .wing_right
+        .positions
+        .len();
+    assert_eq!(fan.count.0 as usize, wings::BLUR_COPIES * one_wing);
 }
 
 #[test]
@@ -436,13 +548,13 @@ fn wing_flap_tracks_beat_at_the_requested_rate_in_phase_groups() {
     let lo = up.iter().copied().fold(f32::INFINITY, f32::min);
     let hi = up.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     // Six samples per stroke catch at least cos(30°) of the amplitude whatever the phase.
-    let reach = WING_AMPLITUDE_DEG * 0.86;
+    let reach = wings::AMPLITUDE_DEG * 0.86;
     assert!(
-        hi <= WING_MID_DEG + WING_AMPLITUDE_DEG + 1e-3 && hi >= WING_MID_DEG + reach,
+        hi <= wings::MID_DEG + wings::AMPLITUDE_DEG + 1e-3 && hi >= wings::MID_DEG + reach,
         "{hi}"
     );
     assert!(
-        lo >= WING_MID_DEG - WING_AMPLITUDE_DEG - 1e-3 && lo <= WING_MID_DEG - reach,
+        lo >= wings::MID_DEG - wings::AMPLITUDE_DEG - 1e-3 && lo <= wings::MID_DEG - reach,
         "{lo}"
     );
     // 4 Hz at 24 fps: the pose repeats every 6 frames.
@@ -466,7 +578,7 @@ fn wing_flap_tracks_beat_at_the_requested_rate_in_phase_groups() {
         .value()];
     assert_eq!(
         mat.pbr_metallic_roughness.base_color_factor.0[3],
-        WING_ALPHA_FLAP
+        wings::ALPHA_CLEAR
     );
 }
 
@@ -678,9 +790,15 @@ fn validator_report(path: &Path) -> Option<serde_json::Value> {
 #[test]
 fn khronos_validator_reports_no_errors_or_warnings() {
     let dir = tempfile::tempdir().unwrap();
-    for flap_hz in [0.0, 6.0] {
+    for (flap_hz, layout) in [
+        (0.0, GltfLayout::Parts),
+        (6.0, GltfLayout::Parts),
+        (0.0, GltfLayout::Agent),
+        (6.0, GltfLayout::Agent),
+    ] {
         let mut b = Bake::new(meta(&[("bees", 5, 0.012), ("big", 2, 0.02)], 1, 30));
         b.flap_hz = flap_hz;
+        b.layout = layout;
         b.varying_scale = true;
         for container in [Container::Glb, Container::Gltf] {
             let path = &b.run(container, dir.path())[0];
@@ -762,9 +880,7 @@ fn a_range_too_long_for_f32_key_times_is_refused() {
 /// A test-only articulated insect: a thorax (the attitude) with two wings driven by the
 /// channel "stroke" about X and an abdomen driven by "abdomen" about Z, no lateral offset.
 mod articulated {
-    use crate::species::{
-        Alpha, Channel, Drive, Material, Part, PartMesh, PolyMesh, Primitive, ProxyMesh, Species,
-    };
+    use crate::species::{Alpha, Channel, Drive, Material, Part, PartMesh, Primitive, Species};
     use glam::Vec3;
 
     pub const CHANNELS: [Channel; 2] = [
@@ -830,7 +946,6 @@ mod articulated {
             },
         ],
         meshes,
-        proxies,
     };
 
     /// A triangle in the XZ plane (normal +Y) spanning `a`, `b`, `c` (body lengths).
@@ -886,26 +1001,6 @@ mod articulated {
                 offset: Vec3::new(-0.1, 0.0, 0.0) * length,
             },
         ]
-    }
-
-    fn proxies(length: f32) -> Vec<ProxyMesh> {
-        meshes(length)
-            .into_iter()
-            .map(|pm| ProxyMesh {
-                mesh: PolyMesh {
-                    points: pm.primitives[0]
-                        .0
-                        .positions
-                        .iter()
-                        .map(|p| Vec3::from(*p) + pm.offset)
-                        .collect(),
-                    face_counts: vec![3],
-                    face_indices: vec![0, 1, 2],
-                },
-                color: [0.5, 0.4, 0.3],
-                opacity: None,
-            })
-            .collect()
     }
 }
 
@@ -1041,6 +1136,66 @@ fn an_articulated_species_animates_its_channel_driven_parts() {
         assert_eq!(issues["numErrors"], 0, "{report:#}");
         assert_eq!(issues["numWarnings"], 0, "{report:#}");
         assert_eq!(issues["numInfos"], 0, "{report:#}");
+    }
+}
+
+#[test]
+fn agent_layout_gives_channel_driven_parts_their_own_animated_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = meta(&[("moths", 2, 0.03)], 1, 10);
+    m.swarms[0].species = &articulated::MOTH;
+    m.swarms[0].channels = articulated::CHANNELS.to_vec();
+    let path = dir.path().join("moths.glb");
+    let mut w: Box<dyn CacheWriter> = Box::new(
+        GltfWriter::create(
+            Container::Glb,
+            &path,
+            &m,
+            &layout_opts(0.0, GltfLayout::Agent),
+        )
+        .unwrap(),
+    );
+    for f in m.frame_start..=m.frame_end {
+        let swarms = moth_frames(&m, f);
+        w.write_frame(&Frame {
+            frame: f,
+            time: 0.0,
+            swarms: &swarms,
+        })
+        .unwrap();
+    }
+    crate::atomic::commit_all(w.finish().unwrap()).unwrap();
+    let doc = read(&path);
+    let ids = moth_frames(&m, 1)[0].ids.clone();
+    let name = agent_name(&articulated::MOTH, ids[0]);
+    let agent = &doc.root.nodes[doc.node(&name).value()];
+    // The thorax (the attitude) is the agent node's mesh; the moving parts hang off it at
+    // their offsets.
+    assert_eq!(
+        doc.root.meshes[agent.mesh.unwrap().value()].name.as_deref(),
+        Some("moth_30mm")
+    );
+    let kids: Vec<String> = agent
+        .children
+        .clone()
+        .unwrap()
+        .iter()
+        .map(|k| doc.root.nodes[k.value()].name.clone().unwrap())
+        .collect();
+    assert_eq!(
+        kids,
+        ["wing_l", "wing_r", "abdomen"].map(|p| format!("{name}_{p}"))
+    );
+    let abdomen = doc.node(&format!("{name}_abdomen"));
+    let q = doc.quats(doc.track(abdomen, Property::Rotation).unwrap().1);
+    for (k, f) in (m.frame_start..=m.frame_end).enumerate() {
+        let deg = moth_frames(&m, f)[0].channels[1][0];
+        assert!(q[k].dot(channel_rotation(Vec3::Z, deg)).abs() > 1.0 - 1e-6);
+    }
+    if let Some(report) = validator_report(&path) {
+        assert_eq!(report["issues"]["numErrors"], 0, "{report:#}");
+        assert_eq!(report["issues"]["numWarnings"], 0, "{report:#}");
+        assert_eq!(report["issues"]["numInfos"], 0, "{report:#}");
     }
 }
 

@@ -1,4 +1,4 @@
-//! The honeybee's glTF geometry, shared by every bee node: a striped body and two
+//! The honeybee's geometry (glTF meshes and USD prototype), shared by every bee: a striped body and two
 //! translucent wings.
 //!
 //! Real scale: the body is exactly `length` metres long along +X (head at +X), centred on
