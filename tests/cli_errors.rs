@@ -53,7 +53,8 @@ fn files_under(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-/// Asserts that the folder holds exactly `expected` files (the inputs): nothing was written.
+/// Asserts that the folder holds exactly `expected` files (the inputs, or the inputs and
+/// a bake's set): nothing else was written.
 fn assert_only(dir: &Path, expected: &[&str]) {
     let mut want: Vec<PathBuf> = expected.iter().map(PathBuf::from).collect();
     want.sort();
@@ -119,7 +120,10 @@ fn a_valid_shot_bakes_with_exit_0_and_writes_the_tracks() {
         &["bake", "shot.toml", "--out", "out", "--format", "csv"],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
-    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    assert_only(
+        dir.path(),
+        &["shot.toml", "out/shot.tracks.csv", "out/shot.beeswarm.json"],
+    );
     let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3);
 }
@@ -735,7 +739,10 @@ fn good_arguments_are_accepted() {
     // Repeated and mixed-case formats, negative frames: exit 0 and exactly the CSV.
     let (run, dir) = bake_with(&["--format", "CSV,csv", "--frames", "-2:1"]);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    assert_only(
+        dir.path(),
+        &["shot.toml", "out/shot.tracks.csv", "out/shot.beeswarm.json"],
+    );
     let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
     let frames: Vec<&str> = csv
         .lines()

@@ -105,6 +105,12 @@ pub fn run(a: BakeArgs) -> Result<()> {
         threads: a.threads,
     };
 
+    if !a.quiet
+        && let Some(problem) =
+            crate::cache_set::read(&out_dir, &shot.name).problem(&out_dir, &shot.name)
+    {
+        eprintln!("note: {problem}");
+    }
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
     let mut reporter = Reporter::new(a.progress, shot.frame_count(), a.quiet);
     let started = std::time::Instant::now();

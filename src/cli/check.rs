@@ -4,6 +4,7 @@ use crate::error::Result;
 use crate::export::Format;
 use crate::shot::{Region, Shape, Shot, Swarm, defaults};
 use clap::Args;
+use std::path::Path;
 
 #[derive(Args, Debug)]
 #[command(
@@ -47,6 +48,8 @@ fn dry_run(plan: &super::bake::Plan) -> String {
     let mut s = String::new();
     let mut files: Vec<(String, f64)> = Vec::new();
     let mut scratch = 0.0;
+    // Clip layers, when the USDA cache is split.
+    let mut usda_clips: Option<usize> = None;
     for f in &plan.formats {
         let name = f.file_name(&shot.name);
         match f {
@@ -66,6 +69,7 @@ fn dry_run(plan: &super::bake::Plan) -> String {
                 });
                 if clip > 0 {
                     let clips = (frames / clip as f64).ceil();
+                    usda_clips = Some(clips as usize);
                     files.push((
                         format!(
                             "{name} + {}.clips/ ({clips} clip layers of {clip} frames)",
@@ -95,6 +99,20 @@ fn dry_run(plan: &super::bake::Plan) -> String {
         };
         let _ = writeln!(s, "    {name}: about {}{replaces}", bytes(*size));
     }
+    let _ = writeln!(
+        s,
+        "    {}: the set's manifest (files, sizes, SHA-256, shot hash, seed, frames)",
+        crate::cache_set::manifest_path(Path::new(""), &shot.name).display()
+    );
+    let previous = crate::cache_set::read(&plan.out_dir, &shot.name);
+    if let Some(problem) = previous.problem(&plan.out_dir, &shot.name) {
+        let _ = writeln!(s, "  note: {problem}");
+    }
+    for old in previous.files() {
+        if !writes(&old, &shot.name, &files, usda_clips) {
+            let _ = writeln!(s, "    {old}: removed (a file of the previous set)");
+        }
+    }
     let disk: f64 = files.iter().map(|(_, b)| b).sum();
     // Simulation state (two agent buffers, neighbour records and lists, the frame
     // record), the glTF writer's per-bee state and document, one USDA frame of text.
@@ -120,6 +138,30 @@ fn dry_run(plan: &super::bake::Plan) -> String {
         bytes(disk + scratch)
     );
     s
+}
+
+/// Whether a bake writing `files` (names, with a description after a space) and, with
+/// clips, `clips` clip layers writes the previous set's file `old`.
+fn writes(old: &str, shot: &str, files: &[(String, f64)], clips: Option<usize>) -> bool {
+    if files
+        .iter()
+        .any(|(name, _)| name.split(' ').next() == Some(old))
+    {
+        return true;
+    }
+    let Some(count) = clips else {
+        return false;
+    };
+    let Some(layer) = old
+        .strip_prefix(&format!("{shot}.clips/{shot}."))
+        .and_then(|r| r.strip_suffix(".usda"))
+    else {
+        return false;
+    };
+    layer == "manifest"
+        || layer
+            .parse::<usize>()
+            .is_ok_and(|i| (1..=count).contains(&i))
 }
 
 /// Seconds to simulate `shot`, from two frames of a copy with at most 2,000 agents at the
