@@ -40,8 +40,6 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
             dir.display()
         ))
     })?;
-    // What bakes killed outright (kill -9, out of memory) left here goes first.
-    crate::atomic::remove_stale_temporaries(dir);
     crate::atomic::probe_writable(dir).map_err(|e| {
         Error::input(format!(
             "the output folder {} is not writable: {e}",
@@ -102,6 +100,8 @@ pub fn bake(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
+    // What bakes killed outright (kill -9, out of memory) left here goes first.
+    crate::cache_set::remove_stale_temporaries(opts.out_dir, &shot.name);
     let start = Instant::now();
     let mut sim = Simulation::new(shot);
     sim.set_cancel(&INTERRUPTED);

@@ -204,6 +204,18 @@ fn is_member_path(shot_name: &str, path: &str) -> bool {
     }
 }
 
+/// Removes what bakes of this shot killed outright left in `dir` and in its clips folder
+/// `<name>.clips/` (see `crate::atomic::remove_stale_temporaries`), whatever formats this
+/// bake writes; the clips folder goes too if that empties it (a killed bake may have made
+/// it). Returns how many files went.
+pub fn remove_stale_temporaries(dir: &Path, shot_name: &str) -> usize {
+    let clips = dir.join(format!("{shot_name}.clips"));
+    let removed = crate::atomic::remove_stale_temporaries(dir)
+        + crate::atomic::remove_stale_temporaries(&clips);
+    let _ = std::fs::remove_dir(&clips); // only when empty
+    removed
+}
+
 /// Size and SHA-256 of a file, read in 1 MiB blocks; stops on an interrupt.
 pub fn hash_file(path: &Path) -> Result<(u64, String)> {
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
