@@ -1,0 +1,78 @@
+//! Shots over the limits a user can raise (issue 16): `check` and `bake` refuse them with
+//! a located error (exit 2) giving the figures and the flag, `--allow-large`.
+
+use std::path::Path;
+use std::process::Command;
+
+fn run(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_crowded_spawn_is_refused_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 million bees, about 600 neighbours each within 0.15 m: 1.2 × 10⁹ pairs per step.
+    std::fs::write(
+        dir.path().join("shot.toml"),
+        "[scene]\nframes = [1, 2]\n\n[[swarm]]\ncount = 2000000\nspawn = { size = [3.6, 3.6, 3.6] }\n",
+    )
+    .unwrap();
+    for cmd in ["check", "bake"] {
+        let (code, _, stderr) = run(dir.path(), &[cmd, "shot.toml", "--format", "csv"]);
+        assert_eq!(code, 2, "{cmd}: {stderr}");
+        for part in [
+            "shot.toml:5:9: key `swarm[0].count`",
+            "starts with 2000000 agents, each with about 606 neighbours within 0.15 m",
+            "1.2e9 neighbour pairs per step, above the limit of 1e9",
+            "pass --allow-large",
+        ] {
+            assert!(stderr.contains(part), "{cmd}: {part:?} in {stderr}");
+        }
+    }
+    assert!(
+        !dir.path().join("out").exists(),
+        "the refused bake wrote nothing"
+    );
+    let (code, stdout, stderr) = run(
+        dir.path(),
+        &["check", "shot.toml", "--format", "csv", "--allow-large"],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("about 606 neighbours"), "{stdout}");
+}
+
+#[test]
+fn a_cache_larger_than_the_free_disk_is_refused_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    // 10⁶ bees × 10⁵ frames of CSV: about 16 TB, more than any test machine has free.
+    std::fs::write(
+        dir.path().join("shot.toml"),
+        "[scene]\nframes = [1, 100000]\n[[swarm]]\ncount = 1000000\n",
+    )
+    .unwrap();
+    let (code, _, stderr) = run(dir.path(), &["check", "shot.toml", "--format", "csv"]);
+    assert_eq!(code, 2, "{stderr}");
+    for part in [
+        "shot.toml:4:9: key `swarm[0].count`",
+        "a bake of 1000000 bees × 100000 frames needs about 16.3 TB of disk while it runs",
+        "free",
+        "pass --allow-large",
+    ] {
+        assert!(stderr.contains(part), "{part:?} in {stderr}");
+    }
+    let (code, stdout, stderr) = run(
+        dir.path(),
+        &["check", "shot.toml", "--format", "csv", "--allow-large"],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("16.3 TB of disk"), "{stdout}");
+}
