@@ -413,6 +413,31 @@ mod tests {
         }
     }
 
+    /// What hashing adds to a bake, per GB of caches (docs/caches.md):
+    /// `cargo test --release --lib hash_throughput -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn hash_throughput() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a");
+        let block: Vec<u8> = (0..1 << 20).map(|i| (i * 7 % 251) as u8).collect();
+        let mut f = std::fs::File::create(&p).unwrap();
+        for _ in 0..512 {
+            std::io::Write::write_all(&mut f, &block).unwrap();
+        }
+        drop(f);
+        for _ in 0..3 {
+            let t = std::time::Instant::now();
+            let (bytes, _) = hash_file(&p).unwrap();
+            let s = t.elapsed().as_secs_f64();
+            println!(
+                "{} MB in {s:.2} s: {:.0} MB/s",
+                bytes / 1_000_000,
+                bytes as f64 / s / 1e6
+            );
+        }
+    }
+
     #[test]
     fn sha256_is_the_standard_one() {
         let dir = tempfile::tempdir().unwrap();
