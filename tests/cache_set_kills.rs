@@ -7,7 +7,9 @@
 //! The moments are reached with the `BEESWARM_PAUSE_AT` hook (docs/caches.md): the bake
 //! prints `paused at <point>` and waits there to be killed.
 
+mod common;
 use beeswarm::cache_set::{self, Manifest, Previous};
+use common::files_under;
 use std::io::BufRead;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -40,24 +42,6 @@ const MOMENTS: [&str; 10] = [
 
 fn is_temporary(name: &str) -> bool {
     name.starts_with(".beeswarm-") && name.ends_with(".tmp")
-}
-
-/// Every file under `dir`, relative and `/`-separated, sorted.
-fn files_under(dir: &Path) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push(p.strip_prefix(dir).unwrap().to_string_lossy().into_owned());
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 fn temporaries(dir: &Path) -> Vec<String> {

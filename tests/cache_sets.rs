@@ -2,7 +2,9 @@
 //! a re-bake replaces the set as a whole and removes the previous set's files it no longer
 //! writes, and only those; a missing, corrupt or unfinished manifest is handled.
 
+mod common;
 use beeswarm::cache_set::{self, Manifest};
+use common::files_under;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -23,29 +25,21 @@ fn bake(dir: &Path, args: &[&str]) -> (i32, String) {
     )
 }
 
+/// `check` of a csv bake into `out`, which must pass; its report.
+fn check_csv(dir: &Path) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .current_dir(dir)
+        .args(["check", "shot.toml", "--out", "out", "--format", "csv"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 fn baked(dir: &Path, args: &[&str]) -> String {
     let (code, stderr) = bake(dir, args);
     assert_eq!(code, 0, "{stderr}");
     stderr
-}
-
-/// Every file under `dir`, relative and `/`-separated, sorted.
-fn files_under(dir: &Path) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap();
-                out.push(rel.to_string_lossy().replace('\\', "/"));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 /// The folder's set, checked: complete, every listed file as described (size, SHA-256).
@@ -168,13 +162,7 @@ fn a_corrupt_manifest_is_reported_and_replaced() {
     baked(dir.path(), &["--format", "glb,csv"]);
     std::fs::write(out.join("hive.beeswarm.json"), "{ not json").unwrap();
     // check reports it, the bake says so and writes a good one.
-    let check = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
-        .current_dir(dir.path())
-        .args(["check", "shot.toml", "--out", "out", "--format", "csv"])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&check.stdout);
-    assert!(check.status.success());
+    let text = check_csv(dir.path());
     assert!(text.contains("is not a beeswarm manifest"), "{text}");
     let stderr = baked(dir.path(), &["--format", "csv"]);
     assert!(stderr.contains("is not a beeswarm manifest"), "{stderr}");
@@ -225,12 +213,7 @@ fn an_unfinished_replacement_is_reported_and_completed_by_the_next_bake() {
     )
     .unwrap();
     assert!(cache_set::verify(&out, "hive").is_err(), "not a whole set");
-    let check = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
-        .current_dir(dir.path())
-        .args(["check", "shot.toml", "--out", "out", "--format", "csv"])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&check.stdout);
+    let text = check_csv(dir.path());
     assert!(text.contains("stopped while replacing"), "{text}");
     assert!(
         text.contains("hive.glb: removed") && text.contains("hive.usda: removed"),
