@@ -78,7 +78,7 @@ fn a_cache_larger_than_the_free_disk_is_refused_unless_allowed() {
 }
 
 /// Memory the system will not give is an error naming the count (exit 2), not an abort:
-/// the bake runs with its address space capped at 1.5 GB (`setrlimit`, as `ulimit -v`
+/// check and bake run with their address space capped at 1.5 GB (`setrlimit`, as `ulimit -v`
 /// does), below the 2.6 GB a million bees with glTF and USDA need.
 #[cfg(target_os = "linux")]
 #[test]
@@ -90,36 +90,39 @@ fn memory_the_system_refuses_is_an_error_not_an_abort() {
         "[scene]\nframes = [1, 2]\n[[swarm]]\ncount = 1000000\n",
     )
     .unwrap();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
-    cmd.current_dir(dir.path()).args([
-        "bake",
-        "shot.toml",
-        "--format",
-        "glb,usda",
-        "--progress",
-        "none",
-    ]);
-    // SAFETY: only setrlimit, which is async-signal-safe, runs between fork and exec.
-    unsafe {
-        cmd.pre_exec(|| {
-            let limit = libc::rlimit {
-                rlim_cur: 1_500_000_000,
-                rlim_max: 1_500_000_000,
-            };
-            if libc::setrlimit(libc::RLIMIT_AS, &limit) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
+    // check refuses it first, as bake does.
+    for command in ["check", "bake"] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
+        cmd.current_dir(dir.path()).args([
+            command,
+            "shot.toml",
+            "--format",
+            "glb,usda",
+            "--progress",
+            "none",
+        ]);
+        // SAFETY: only setrlimit, which is async-signal-safe, runs between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                let limit = libc::rlimit {
+                    rlim_cur: 1_500_000_000,
+                    rlim_max: 1_500_000_000,
+                };
+                if libc::setrlimit(libc::RLIMIT_AS, &limit) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}: {stderr}");
+        for part in [
+            "shot.toml:4:9: key `swarm[0].count`",
+            "a bake of 1000000 bees needs about 2.6 GB of memory, and the system refused to allocate it",
+        ] {
+            assert!(stderr.contains(part), "{command}: {part:?} in {stderr}");
+        }
+        assert!(!dir.path().join("out").exists(), "nothing written");
     }
-    let out = cmd.output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
-    for part in [
-        "shot.toml:4:9: key `swarm[0].count`",
-        "a bake of 1000000 bees needs about 2.6 GB of memory, and the system refused to allocate it",
-    ] {
-        assert!(stderr.contains(part), "{part:?} in {stderr}");
-    }
-    assert!(!dir.path().join("out").exists(), "nothing written");
 }

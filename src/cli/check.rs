@@ -24,6 +24,7 @@ pub fn run(a: CheckArgs) -> Result<()> {
     };
     // Whatever would stop a bake before it starts stops the check too.
     let plan = a.bake.plan(shot)?;
+    super::resources::reserve_memory(&plan, a.bake.shot.as_deref())?;
     let mut text = summary(&plan.shot);
     text += &dry_run(&plan);
     crate::progress::stdout(&text);
