@@ -109,11 +109,17 @@ fn every_example_bakes_to_complete_finite_tracks() {
         assert_eq!(code, 0, "beeswarm bake {file}:\n{stderr}");
 
         let csv_path = dir.join(format!("{}.tracks.csv", shot.name));
-        let written: Vec<PathBuf> = std::fs::read_dir(&dir)
+        let mut written: Vec<PathBuf> = std::fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().path())
             .collect();
-        assert_eq!(written, vec![csv_path.clone()], "{file}: only the tracks");
+        written.sort();
+        let manifest = dir.join(format!("{}.beeswarm.json", shot.name));
+        assert_eq!(
+            written,
+            vec![manifest, csv_path.clone()],
+            "{file}: only the tracks and the set's manifest"
+        );
         let csv = std::fs::read_to_string(&csv_path).unwrap();
         let mut lines = csv.lines();
         assert_eq!(lines.next(), Some(HEADER), "{file}");

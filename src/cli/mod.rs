@@ -5,6 +5,7 @@ mod bake;
 mod bench;
 mod check;
 pub mod models;
+mod resources;
 
 use crate::error::Error;
 use clap::{Parser, Subcommand};

@@ -695,7 +695,8 @@ def test_cancel_kills_the_bake_and_keeps_the_previous_cache(beeswarm_bin, tmp_pa
     assert time.monotonic() - t < 5
     assert p.returncode != 0 and p.cancelled
     assert cache.read_bytes() == before
-    assert sorted(x.name for x in out.iterdir() if not x.name.startswith(".")) == ["long.tracks.csv"]
+    assert sorted(x.name for x in out.iterdir() if not x.name.startswith(".")) == [
+        "long.beeswarm.json", "long.tracks.csv"]
 
 
 # ---------------------------------------------------------------------------------------
