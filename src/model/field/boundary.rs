@@ -93,14 +93,29 @@ impl Boundary {
 /// The boundary nearest `p` among `lists`, if any lies within `reach`.
 #[inline]
 pub fn nearest<'a>(lists: [&'a [Boundary]; 2], p: Vec3, reach: f32) -> Option<Near<'a>> {
+    nearest_and_clearance(lists, p, reach).0
+}
+
+/// [`nearest`], and the distance from `p` to the nearest obstacle (`Boundary::Shape`),
+/// whatever its distance (infinite without obstacles).
+#[inline]
+pub fn nearest_and_clearance<'a>(
+    lists: [&'a [Boundary]; 2],
+    p: Vec3,
+    reach: f32,
+) -> (Option<Near<'a>>, f32) {
     let mut best: Option<Near<'a>> = None;
+    let mut clearance = f32::INFINITY;
     for b in lists.into_iter().flatten() {
         let (d, n) = b.query(p);
+        if matches!(b, Boundary::Shape(_)) {
+            clearance = clearance.min(d);
+        }
         if d < reach && best.as_ref().is_none_or(|x| d < x.d) {
             best = Some(Near { d, n, boundary: b });
         }
     }
-    best
+    (best, clearance)
 }
 
 #[cfg(test)]

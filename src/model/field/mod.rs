@@ -24,7 +24,7 @@ use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::{self, Rng};
 use crate::species::{Channel, HONEYBEE};
 use attitude::Attitude;
-use boundary::{Boundary, nearest};
+use boundary::{Boundary, nearest_and_clearance};
 use glam::Vec3;
 use noise_field::{LocalField, ramp};
 pub use params::FieldParams;
@@ -221,7 +221,7 @@ impl Model for FieldModel {
         let p = a.pos;
         let ri = self.radius * a.size;
         let d0 = self.local.d0();
-        let near = nearest([&self.walls, &self.balls], p, d0);
+        let (near, clearance) = nearest_and_clearance([&self.walls, &self.balls], p, d0);
         // Eq. 1–3.
         let v_l = self.local.velocity(p, near.as_ref());
         // Eq. 8, and the phototaxis pull.
@@ -261,7 +261,14 @@ impl Model for FieldModel {
                 }
             }
         }
-        let (q, _) = flight::keep_out(cx, p, q, v, ri);
+        // The distance to an obstacle changes at most as fast as the agent moves: a move
+        // shorter than the clearance (less the body radius) cannot reach one, and the
+        // guard's sweep would find nothing.
+        let q = if (q - p).length() + ri < clearance {
+            q
+        } else {
+            flight::keep_out(cx, p, q, v, ri).0
+        };
         let vel = math::finite_or_zero((q - p) / dt);
         Insect {
             pos: q,
