@@ -302,6 +302,24 @@ fn benchmark() {
             steps / per_frame / paper_fps,
         );
     }
+    // Phototaxis at Table 1's own count (the example has Fig. 1(b)'s 300).
+    let mut shot = load("paper001_phototaxis.toml");
+    shot.swarms[0].count = 30;
+    let ms = beeswarm::bake::with_threads(threads, || {
+        let mut sim = Simulation::new(&shot);
+        sim.advance();
+        let t = Instant::now();
+        for _ in 0..96 {
+            sim.advance();
+        }
+        t.elapsed().as_secs_f64() / 96.0 * 1e3
+    })
+    .unwrap();
+    println!(
+        "phototaxis at 30 agents: {ms:.3} ms/frame = {:.0} steps/s ({:.1}× the paper's 1988.1)",
+        2e3 / ms,
+        2e3 / ms / 1988.1
+    );
     // Time per frame against the number of agents, at the locusts' fixed field.
     let base = load("paper001_locusts.toml");
     for n in [2500usize, 5000, 10_000, 20_000] {
