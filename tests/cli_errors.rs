@@ -755,7 +755,7 @@ fn bad_bench_options_name_the_option() {
         ),
         (
             &["--model", "wasp"][..],
-            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", found \"wasp\"",
+            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\", found \"wasp\"",
         ),
         (
             &["--model", "boids", "--preset", "nest"][..],
@@ -900,7 +900,7 @@ fn parameters_and_presets_are_checked_against_the_swarms_model() {
         &err,
         &[
             "key `swarm[0].model`",
-            "expected one of \"bee\", \"curl\", \"brownian\", \"boids\"",
+            "expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\"",
         ],
     );
     // A preset file written for another model.

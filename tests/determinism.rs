@@ -1,6 +1,7 @@
 //! The same shot and seed give byte-identical caches whatever the number of threads, and
 //! a different seed gives a different swarm. The shot holds a crowd (400 bees in a 5 cm
-//! cube) so that the bounded-neighbour search's ring walk is covered too.
+//! cube) so that the bounded-neighbour search's ring walk is covered too, and a swarm of
+//! paper 001's field model (its path field, noise and minimum distance enforcement).
 
 use std::path::Path;
 use std::process::Command;
@@ -28,6 +29,12 @@ model = "brownian"
 name = "crowd"
 count = 400
 spawn = { shape = "box", center = [0.6, 1.5, 0], size = [0.05, 0.05, 0.05] }
+[[swarm]]
+name = "field"
+count = 200
+model = "field"
+spawn = { shape = "box", center = [-0.5, 1, 0], size = [0.4, 0.4, 0.4] }
+params = { d_min = 0.05, goal_radius = 0.2 }
 [[obstacle]]
 type = "cylinder"
 center = [0.3, 1, 0.3]
@@ -36,7 +43,7 @@ height = 2
 [[target]]
 type = "nest"
 position = [0, 1, 0]
-swarms = ["bees", "boids"]
+swarms = ["bees", "boids", "field"]
 "#;
 
 fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {

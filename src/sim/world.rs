@@ -122,6 +122,7 @@ impl<M: Model> Swarm for Runner<M> {
     }
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
+        self.model.prepare(cx);
         let m = &self.model;
         let (agents, start) = (&self.agents, self.start);
         self.next.clear();
