@@ -290,6 +290,9 @@ impl PreviewWriter {
             (v.x.1, v.y.1),
             (v.x.0, v.y.1),
         ];
+        // Every fill first, then the surface lines, so a wall's fill never veils the
+        // line of another (the six planes of a cage).
+        let mut lines = Vec::new();
         for o in &self.obstacles {
             let Shape::Plane { point, normal } = o.shape else {
                 continue;
@@ -311,14 +314,15 @@ impl PreviewWriter {
             }
             let along = (-n.1, n.0);
             let far = (v.x.1 - v.x.0) * 4.0;
-            chart.draw_series([PathElement::new(
+            lines.push(PathElement::new(
                 vec![
                     (p.0 - along.0 * far, p.1 - along.1 * far),
                     (p.0 + along.0 * far, p.1 + along.1 * far),
                 ],
                 GROUND_EDGE.stroke_width(px(1.5) as u32),
-            )])?;
+            ));
         }
+        chart.draw_series(lines)?;
         Ok(())
     }
 
