@@ -98,7 +98,7 @@ impl Legend {
                 }
             }
             // Nudged down: the font's centre line sits above the visual centre of lower case.
-            area.draw_text(label, &style, p(MARK + GAP, 1.0))?;
+            area.draw_text(label, &style, p(MARK + GAP, 2.5))?;
         }
         Ok(())
     }
