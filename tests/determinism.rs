@@ -1,7 +1,8 @@
-//! The same shot and seed give byte-identical caches whatever the number of threads, and
-//! a different seed gives a different swarm. The shot holds a crowd (400 bees in a 5 cm
-//! cube) so that the bounded-neighbour search's ring walk is covered too, and a swarm of
-//! paper 001's field model (its path field, noise and minimum distance enforcement).
+//! The same shot and seed give byte-identical caches (and preview PNG) whatever the number
+//! of threads, and a different seed gives a different swarm. The shot holds a crowd (400
+//! bees in a 5 cm cube) so that the bounded-neighbour search's ring walk is covered too, and
+//! a swarm of paper 001's field model (its path field, noise and minimum distance
+//! enforcement).
 
 use std::path::Path;
 use std::process::Command;
@@ -58,6 +59,8 @@ fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)>
         out.to_str().unwrap(),
         "--format",
         "csv",
+        // The preview PNG too: drawn on the writer thread, it must not vary either.
+        "--preview",
         "--progress",
         "none",
         "--threads",

@@ -6,8 +6,9 @@ use beeswarm::eval::metrics::{Metric, MetricOptions, compute, poly6};
 use beeswarm::eval::report::{Measured, Reference, Settings, compare, measure};
 use beeswarm::eval::resample::resample;
 use beeswarm::eval::tracks::{self, Dataset, Track, TrackFormat};
-use beeswarm::plot::{Canvas, Chart, Legend, LegendMark, palette};
+use beeswarm::plot::{Figure, Legend, Mark, palette, px, text};
 use glam::DVec3;
+use plotters::prelude::*;
 use std::path::PathBuf;
 
 const DT: f64 = 0.02;
@@ -308,29 +309,54 @@ fn mosquito_recording_compared_with_itself_is_perfect_and_finite() {
     assert!(!json.contains("NaN"));
 }
 
-fn sample_figure() -> Canvas {
-    let mut c = Canvas::new(320, 220, palette::WHITE);
-    let ch = Chart::new(60, 30, 300, 170, (0.0, 2.0), (0.0, 1.0));
-    ch.bars(
-        &mut c,
-        &[0.0, 0.5, 1.0, 1.5, 2.0],
-        &[0.2, 0.8, 0.5, 0.1],
-        palette::LIGHT_GREY,
-    );
-    ch.steps(
-        &mut c,
-        &[0.0, 0.5, 1.0, 1.5, 2.0],
-        &[0.3, 0.6, 0.4, 0.2],
-        palette::series(0),
-        2,
-    );
-    ch.frame(&mut c, "speed (m/s)", "x", "probability");
-    c.circle(100.0, 100.0, 20.0, palette::series(1));
-    let mut l = Legend::default();
-    l.add("real", palette::LIGHT_GREY, LegendMark::Box);
-    l.add("sim ω", palette::series(0), LegendMark::Line);
-    l.draw(&mut c, 200, 40);
-    c
+/// A small chart: grey reference bars, a step outline, a circle, the figure legend.
+fn sample_figure() -> Figure {
+    Figure::draw(320, 220, |root| {
+        let mut ch = ChartBuilder::on(root)
+            .margin(px(10.0))
+            .x_label_area_size(px(30.0))
+            .y_label_area_size(px(40.0))
+            .build_cartesian_2d(0.0..2.0, 0.0..1.0)?;
+        ch.configure_mesh()
+            .label_style(text(12.0, palette::TEXT))
+            .y_desc("probability")
+            .axis_desc_style(text(12.0, palette::TEXT))
+            .draw()?;
+        let edges = [0.0, 0.5, 1.0, 1.5, 2.0];
+        ch.draw_series([0.2, 0.8, 0.5, 0.1].iter().enumerate().map(|(i, &h)| {
+            Rectangle::new(
+                [(edges[i], 0.0), (edges[i + 1], h)],
+                palette::LIGHT_GREY.filled(),
+            )
+        }))?;
+        ch.draw_series([PathElement::new(
+            vec![
+                (0.0, 0.3),
+                (0.5, 0.3),
+                (0.5, 0.6),
+                (1.0, 0.6),
+                (1.0, 0.4),
+                (2.0, 0.2),
+            ],
+            palette::series(0).stroke_width(px(2.0) as u32),
+        )])?;
+        ch.draw_series([Circle::new(
+            (1.2, 0.7),
+            px(20.0),
+            palette::series(1).stroke_width(px(1.0) as u32),
+        )])?;
+        let mut l = Legend::default();
+        l.add(
+            "real",
+            Mark::Area {
+                fill: palette::LIGHT_GREY.to_rgba(),
+                edge: palette::GREY,
+            },
+        );
+        l.add("sim ω", Mark::Line(palette::series(0).to_rgba()));
+        l.draw(root, 180.0, 20.0, 130.0)
+    })
+    .unwrap()
 }
 
 #[test]
@@ -338,18 +364,48 @@ fn plot_writes_a_valid_deterministic_png() {
     let dir = tempfile::tempdir().unwrap();
     let a = dir.path().join("a.png");
     let b = dir.path().join("b.png");
+    // Drawn on another thread too: the font registry is global, the output must not care.
+    let other = std::thread::spawn(sample_figure).join().unwrap();
     sample_figure().save_png(&a).unwrap();
-    sample_figure().save_png(&b).unwrap();
+    other.save_png(&b).unwrap();
     let (ba, bb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     assert_eq!(ba, bb, "same drawing, same bytes");
     assert_eq!(&ba[..8], b"\x89PNG\r\n\x1a\n");
+    // Only the image header and data: no time stamp or text chunk that could vary.
+    let chunks: Vec<&[u8]> = {
+        let mut at = 8;
+        let mut v = Vec::new();
+        while at + 8 <= ba.len() {
+            let len = u32::from_be_bytes(ba[at..at + 4].try_into().unwrap()) as usize;
+            v.push(&ba[at + 4..at + 8]);
+            at += 12 + len;
+        }
+        v
+    };
+    assert!(
+        chunks
+            .iter()
+            .all(|c| [&b"IHDR"[..], b"IDAT", b"IEND"].contains(c)),
+        "{:?}",
+        chunks
+            .iter()
+            .map(|c| String::from_utf8_lossy(c))
+            .collect::<Vec<_>>()
+    );
     let dec = png::Decoder::new(std::io::Cursor::new(ba));
     let mut reader = dec.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
     assert_eq!((info.width, info.height), (320, 220));
     assert_eq!(&buf[..info.buffer_size()], sample_figure().pixels());
-    // Only the PNG is left: the temporary file was renamed.
+    // The text is drawn: the legend's label area is not blank.
+    let fig = sample_figure();
+    let inked = (220..300)
+        .flat_map(|x| (25..60).map(move |y| (x, y)))
+        .filter(|&(x, y)| fig.get(x, y).unwrap()[0] < 150)
+        .count();
+    assert!(inked > 30, "legend text pixels: {inked}");
+    // Only the PNGs are left: the temporary files were renamed.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 }
 

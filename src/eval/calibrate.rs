@@ -10,7 +10,7 @@
 //! (common random numbers), so two parameter sets are compared on the same noise field
 //! and spawn, and differences in fitness come from the parameters rather than from luck.
 
-use super::ga::{self, GaConfig, GaResult};
+use super::ga::{self, GaConfig, GaResult, Generation};
 use super::histogram::TAIL;
 use super::report::{Reference, Settings, measure};
 use super::resample::resample;
@@ -18,10 +18,11 @@ use super::tracks::{self, Dataset, Track, TrackFormat};
 use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
 use crate::model::{ModelKind, ParamValues};
-use crate::plot::{Canvas, Chart, Legend, LegendMark, palette};
+use crate::plot::{Figure, bold, palette, px, text, tick_label};
 use crate::progress::Mode;
 use crate::shot::Shot;
 use crate::sim::Simulation;
+use plotters::prelude::*;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -506,7 +507,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         .figure
         .clone()
         .unwrap_or_else(|| args.out.with_extension("fitness.png"));
-    fitness_figure(&result, &name).save_png(&fig)?;
+    fitness_figure(&result, &name)?.save_png(&fig)?;
     eprintln!(
         "best fitness q = {:.4} after {} generations ({seconds:.1} s)\nwrote {}\nwrote {}",
         result.best_fitness,
@@ -574,9 +575,7 @@ pub fn preset_toml(
 }
 
 /// Best and mean fitness per generation (like Fig. 10 of paper 000).
-pub fn fitness_figure(r: &GaResult, name: &str) -> Canvas {
-    let (w, h) = (720i64, 420i64);
-    let mut c = Canvas::new(w as u32, h as u32, palette::WHITE);
+pub fn fitness_figure(r: &GaResult, name: &str) -> Result<Figure> {
     let n = r.history.len();
     let lo = r
         .history
@@ -585,39 +584,57 @@ pub fn fitness_figure(r: &GaResult, name: &str) -> Canvas {
         .fold(1.0f64, f64::min);
     let hi = r.history.iter().map(|g| g.best).fold(0.0f64, f64::max);
     let pad = ((hi - lo) * 0.08).max(0.005);
-    let chart = Chart::new(
-        80,
-        50,
-        w - 30,
-        h - 60,
-        (1.0, n.max(2) as f64),
-        ((lo - pad).max(0.0), (hi + pad).min(1.0)),
+    let (y0, y1) = ((lo - pad).max(0.0), (hi + pad).min(1.0));
+    let series = |f: fn(&Generation) -> f64| -> Vec<(f64, f64)> {
+        r.history
+            .iter()
+            .map(|g| ((g.index + 1) as f64, f(g)))
+            .collect()
+    };
+    let caption = format!(
+        "Calibration of {name}: fitness q over generations (best {:.4})",
+        r.best_fitness
     );
-    let best: Vec<(f64, f64)> = r
-        .history
-        .iter()
-        .map(|g| ((g.index + 1) as f64, g.best))
-        .collect();
-    let mean: Vec<(f64, f64)> = r
-        .history
-        .iter()
-        .map(|g| ((g.index + 1) as f64, g.mean))
-        .collect();
-    chart.polyline(&mut c, &mean, palette::series(1), 2);
-    chart.polyline(&mut c, &best, palette::series(0), 2);
-    chart.frame(
-        &mut c,
-        &format!(
-            "calibration of {name}: fitness q over generations (best {:.4})",
-            r.best_fitness
-        ),
-        "generation",
-        "fitness q",
-    );
-    let mut l = Legend::default();
-    l.add("best of generation", palette::series(0), LegendMark::Line);
-    l.add("mean of generation", palette::series(1), LegendMark::Line);
-    let (lw, _) = l.size();
-    l.draw(&mut c, chart.right - lw - 8, chart.bottom - 50);
-    c
+    Figure::draw(760, 440, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(&caption, bold(17.0, palette::TEXT))
+            .margin(px(16.0))
+            .x_label_area_size(px(46.0))
+            .y_label_area_size(px(64.0))
+            .build_cartesian_2d(1.0..n.max(2) as f64, y0..y1)?;
+        chart
+            .configure_mesh()
+            .x_desc("generation")
+            .y_desc("fitness q")
+            .x_label_formatter(&|x| tick_label(*x))
+            .y_label_formatter(&|y| tick_label(*y))
+            .label_style(text(13.0, palette::TEXT))
+            .axis_desc_style(text(14.0, palette::TEXT))
+            .bold_line_style(palette::GRID.stroke_width(px(1.0) as u32))
+            .light_line_style(TRANSPARENT)
+            .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
+            .set_all_tick_mark_size(px(4.0))
+            // Generations are whole numbers: no more labels than generations.
+            .x_labels(n.clamp(2, 10))
+            .draw()?;
+        for (label, color, values) in [
+            ("mean of generation", palette::series(1), series(|g| g.mean)),
+            ("best of generation", palette::series(0), series(|g| g.best)),
+        ] {
+            let style = color.stroke_width(px(2.0) as u32);
+            chart
+                .draw_series([PathElement::new(values, style)])?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + px(22.0), y)], style));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .label_font(text(13.0, palette::TEXT))
+            .legend_area_size(px(30.0))
+            .background_style(palette::WHITE.mix(0.9))
+            .border_style(palette::LIGHT_GREY.stroke_width(px(1.0) as u32))
+            .margin(px(10.0))
+            .draw()
+    })
 }

@@ -215,7 +215,7 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &args.figure {
-        figure::draw(&report).save_png(path)?;
+        figure::draw(&report)?.save_png(path)?;
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &args.markdown {

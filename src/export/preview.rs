@@ -2,6 +2,10 @@
 //! the trajectories with the shot's obstacles and targets, for checking a shot at a
 //! glance without opening a 3D package.
 //!
+//! Layers, bottom to top: the ground (planes), the solid obstacles (filled, so a hive box
+//! stands out), the paths (semi-transparent, so dense swarms show where they fly most),
+//! each path's start (ring) and end (dot), then the targets with their names.
+//!
 //! Memory stays bounded whatever the shot: at most `MAX_BEES` bees are followed (an even
 //! stride through all of them, chosen once so every trajectory is whole) and at most
 //! `MAX_POINTS` positions per bee (every frame for shots up to that length, an even
@@ -10,19 +14,33 @@
 use super::CacheWriter;
 use crate::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
-use crate::plot::{Canvas, Chart, Legend, LegendMark, Rgb, palette};
+use crate::plot::{Area, DrawResult, Figure, Legend, Mark, bold, palette, px, text, tick_label};
 use crate::shot::{Obstacle, Shape, Shot, Target, TargetKind};
 use crate::sim::{CacheMeta, Frame};
 use glam::Vec3;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub const MAX_BEES: usize = 300;
 pub const MAX_POINTS: usize = 4000;
 
-const PANEL: i64 = 620;
-/// Smallest distance from the image top to the plot areas, px.
-const MARGIN_TOP: i64 = 78;
+/// Layout in output pixels: figure width, margins, the side of each square plot area, the
+/// panel caption strip, and the space for tick labels below and left of a plot.
+const WIDTH: f64 = 1320.0;
+const MARGIN: f64 = 16.0;
+const PLOT: f64 = 560.0;
+const CAPTION: f64 = 30.0;
+const X_LABELS: f64 = 46.0;
+const Y_LABELS: f64 = 64.0;
+
+/// The ground lets the grid show through; solids hide it more.
+const GROUND: RGBAColor = RGBAColor(222, 212, 178, 0.6);
+const GROUND_EDGE: RGBColor = RGBColor(140, 128, 96);
+const SOLID: RGBAColor = RGBAColor(80, 80, 88, 0.55);
+const SOLID_EDGE: RGBColor = RGBColor(55, 55, 60);
+const TARGET: RGBColor = RGBColor(190, 30, 30);
 
 pub struct PreviewWriter {
     path: PathBuf,
@@ -38,6 +56,46 @@ pub struct PreviewWriter {
     paths: Vec<Vec<Vec3>>,
     frame_stride: usize,
     frames_seen: usize,
+}
+
+/// One of the two views: which way it looks and the data range it shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub top: bool,
+    /// Shown ranges of the view's horizontal and vertical data axes, m. The top view's
+    /// vertical axis is −z (so +z points down the image, as seen from above).
+    pub x: (f64, f64),
+    pub y: (f64, f64),
+    /// The plot area in output pixels: left, top, side.
+    pub origin: (f64, f64),
+    pub side: f64,
+}
+
+impl View {
+    /// The view's 2D data coordinates of a point: (x, −z) from above, (x, y) from the side.
+    pub fn flat(&self, p: Vec3) -> (f64, f64) {
+        if self.top {
+            (p.x as f64, -p.z as f64)
+        } else {
+            (p.x as f64, p.y as f64)
+        }
+    }
+    /// Where a point lands in the figure, output pixels.
+    pub fn pixel(&self, p: Vec3) -> (f64, f64) {
+        let (x, y) = self.flat(p);
+        (
+            self.origin.0 + (x - self.x.0) / (self.x.1 - self.x.0) * self.side,
+            self.origin.1 + (self.y.1 - y) / (self.y.1 - self.y.0) * self.side,
+        )
+    }
+    /// The direction the viewer looks in.
+    fn looking(&self) -> Vec3 {
+        if self.top { Vec3::NEG_Y } else { Vec3::NEG_Z }
+    }
+    /// Metres to output pixels.
+    fn scale(&self) -> f64 {
+        self.side / (self.x.1 - self.x.0)
+    }
 }
 
 impl PreviewWriter {
@@ -72,71 +130,137 @@ impl PreviewWriter {
     }
 
     /// Renders the figure (public so tests and tools can draw without a bake).
-    pub fn render(&self) -> Canvas {
-        let mut legend = Legend::default();
-        for (i, n) in self.swarm_names.iter().enumerate() {
-            legend.add(n.clone(), palette::series(i), LegendMark::Line);
-        }
-        if !self.obstacles.is_empty() {
-            legend.add("obstacles", palette::GREY, LegendMark::Line);
-        }
-        if !self.targets.is_empty() {
-            legend.add("targets", TARGET, LegendMark::Box);
-        }
-        let (_, lh) = legend.size();
-        // Title, then the legend, then the two square plot areas side by side.
-        let top_y = MARGIN_TOP.max(40 + lh + 30);
-        let plot = PANEL - 90;
-        let width = 2 * PANEL + 40;
-        let height = top_y + plot + 50;
-        let mut c = Canvas::new(width as u32, height as u32, palette::WHITE);
+    pub fn render(&self) -> Result<Figure> {
+        Ok(self.render_views()?.0)
+    }
+
+    /// Renders the figure and returns where its two views are, top view first.
+    pub fn render_views(&self) -> Result<(Figure, [View; 2])> {
+        let legend = self.legend();
+        // The legend's height decides where the panels start; it is measured with the
+        // same font on a scratch figure, so the layout fits whatever the names are.
+        let mut legend_h = 0.0;
+        Figure::draw(8, 8, |a| {
+            legend_h = legend.height(a, WIDTH - 2.0 * MARGIN)?;
+            Ok(())
+        })?;
+        let panel_y = MARGIN + 34.0 + legend_h + 12.0;
+        let panel_w = WIDTH / 2.0;
+        let height = panel_y + CAPTION + PLOT + X_LABELS + MARGIN;
+
+        // Both views share the x range and the scale, so they line up and metres are
+        // square on screen.
+        let (lo, hi) = self.extent();
+        let span = (hi - lo).max(Vec3::splat(1e-3));
+        let side = (span.x.max(span.y).max(span.z) * 1.1) as f64;
+        let mid = (lo + hi) * 0.5;
+        let range = |m: f32| (m as f64 - side / 2.0, m as f64 + side / 2.0);
+        let view = |top: bool, k: f64| View {
+            top,
+            x: range(mid.x),
+            y: if top { range(-mid.z) } else { range(mid.y) },
+            origin: (k * panel_w + Y_LABELS + MARGIN, panel_y + CAPTION),
+            side: PLOT,
+        };
+        let views = [view(true, 0.0), view(false, 1.0)];
+
         let (f0, f1) = self.frame_range;
         let title = format!(
-            "{}: {} bees ({} drawn), {} frames ({f0}-{f1} at {} fps)",
+            "{}: {} bees ({} drawn), {} frames ({f0}–{f1} at {} fps)",
             self.shot_name,
             self.bee_total,
             self.followed.len(),
             self.frames_seen,
             self.fps
         );
-        c.text(16, 10, &title, palette::BLACK, 2);
-        legend.draw(&mut c, 16, 36);
+        let fig = Figure::draw(WIDTH as u32, height.ceil() as u32, |root| {
+            root.draw_text(&title, &bold(20.0, palette::TEXT), (px(MARGIN), px(MARGIN)))?;
+            legend.draw(root, MARGIN, MARGIN + 34.0, WIDTH - 2.0 * MARGIN)?;
+            for v in &views {
+                self.draw_view(root, v)?;
+            }
+            Ok(())
+        })?;
+        Ok((fig, views))
+    }
 
-        // Both views share the x range and the scale, so they line up and metres are
-        // square on screen.
-        let (lo, hi) = self.extent();
-        let span = (hi - lo).max(Vec3::splat(1e-3));
-        let side = span.x.max(span.y).max(span.z) * 1.1;
-        let mid = (lo + hi) * 0.5;
-        let range = |m: f32| ((m - side / 2.0) as f64, (m + side / 2.0) as f64);
-        // Top view looks down −Y: +x right, +z towards the bottom of the image.
-        let (zl, zh) = range(mid.z);
-        let top = Chart::new(70, top_y, 70 + plot, top_y + plot, range(mid.x), (zh, zl));
-        let sidev = Chart::new(
-            PANEL + 110,
-            top_y,
-            PANEL + 110 + plot,
-            top_y + plot,
-            range(mid.x),
-            range(mid.y),
-        );
-        for (chart, axis, name) in [
-            (&top, 2usize, "top view (looking down)"),
-            (&sidev, 1, "side view (looking along -z)"),
-        ] {
-            chart.frame(
-                &mut c,
-                name,
-                "x (m)",
-                if axis == 2 { "z (m)" } else { "y (m)" },
-            );
-            chart.clip(&mut c);
-            self.draw_obstacles(&mut c, chart, axis);
-            self.draw_paths(&mut c, chart, axis);
-            self.draw_targets(&mut c, chart, axis);
-            chart.unclip(&mut c);
+    fn legend(&self) -> Legend {
+        let mut legend = Legend::default();
+        for (i, n) in self.swarm_names.iter().enumerate() {
+            legend.add(n.clone(), Mark::Line(palette::series(i).mix(0.8)));
         }
-        c
+        legend.add("start", Mark::Ring(palette::TEXT));
+        legend.add("end", Mark::Dot(palette::TEXT));
+        let named = |planes: bool| -> Vec<&Obstacle> {
+            let is_plane = |o: &&Obstacle| matches!(o.shape, Shape::Plane { .. });
+            self.obstacles
+                .iter()
+                .filter(|o| is_plane(o) == planes)
+                .collect()
+        };
+        for (planes, fill, edge, what) in [
+            (true, GROUND, GROUND_EDGE, "planes"),
+            (false, SOLID, SOLID_EDGE, "obstacles"),
+        ] {
+            let list = named(planes);
+            // A few obstacles are named; a field of stems is one entry.
+            if list.len() <= 4 {
+                for o in list {
+                    legend.add(
+                        format!("{} ({})", o.name, shape_name(&o.shape)),
+                        Mark::Area { fill, edge },
+                    );
+                }
+            } else {
+                legend.add(format!("{} {what}", list.len()), Mark::Area { fill, edge });
+            }
+        }
+        if !self.targets.is_empty() {
+            legend.add("targets", Mark::Dot(TARGET));
+        }
+        legend
+    }
+
+    fn draw_view(&self, root: &Area, v: &View) -> DrawResult {
+        let (left, top) = v.origin;
+        let caption = if v.top {
+            "top view (looking down −y)"
+        } else {
+            "side view (looking along −z)"
+        };
+        root.draw_text(
+            caption,
+            &bold(16.0, palette::TEXT).pos(Pos::new(HPos::Center, VPos::Top)),
+            (px(left + PLOT / 2.0), px(top - CAPTION + 4.0)),
+        )?;
+        let area = root.margin(px(top), px(0.0), px(left - Y_LABELS), px(0.0));
+        let area = area.shrink((0, 0), (px(Y_LABELS + PLOT), px(PLOT + X_LABELS)));
+        let mut chart = ChartBuilder::on(&area)
+            .x_label_area_size(px(X_LABELS))
+            .y_label_area_size(px(Y_LABELS))
+            .build_cartesian_2d(v.x.0..v.x.1, v.y.0..v.y.1)?;
+        let flip = |y: &f64| tick_label(if v.top { -*y } else { *y });
+        chart
+            .configure_mesh()
+            .x_desc("x (m)")
+            .y_desc(if v.top { "z (m)" } else { "y (m)" })
+            .y_label_formatter(&flip)
+            .x_label_formatter(&|x| tick_label(*x))
+            .label_style(text(13.0, palette::TEXT))
+            .axis_desc_style(text(14.0, palette::TEXT))
+            .bold_line_style(palette::GRID.mix(0.8).stroke_width(px(1.0) as u32))
+            .light_line_style(TRANSPARENT)
+            .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
+            .set_all_tick_mark_size(px(4.0))
+            .x_labels(7)
+            .y_labels(7)
+            .draw()?;
+        // The chart clips what it draws to the plot area: the ground's half-planes and
+        // paths that leave the view are cut at the frame.
+        self.draw_ground(&mut chart, v)?;
+        self.draw_solids(&mut chart, v)?;
+        self.draw_paths(&mut chart, v)?;
+        self.draw_targets(&mut chart, v)
     }
 
     fn extent(&self) -> (Vec3, Vec3) {
@@ -144,7 +268,10 @@ impl PreviewWriter {
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         let pts = self.paths.iter().flatten().copied();
         let tg = self.targets.iter().flat_map(|t| t.keys.iter().map(|k| k.1));
-        for p in pts.chain(tg) {
+        // Solid obstacles are in the frame too (a hive the bees never reach still shows),
+        // planes are not: they are unbounded.
+        let solids = self.obstacles.iter().flat_map(|o| outline(&o.shape));
+        for p in pts.chain(tg).chain(solids) {
             lo = lo.min(p);
             hi = hi.max(p);
         }
@@ -156,149 +283,248 @@ impl PreviewWriter {
         }
     }
 
-    fn draw_paths(&self, c: &mut Canvas, chart: &Chart, axis: usize) {
-        for (k, ((si, _), path)) in self.followed.iter().zip(&self.paths).enumerate() {
-            // Bees of a swarm share its colour, with a few shades so paths can be told apart.
-            let shade = (k % 5) as f64 * 0.12;
-            let col = palette::lighten(palette::series(*si), shade);
-            let pts: Vec<(f64, f64)> = path
-                .iter()
-                .map(|p| chart.px(p.x as f64, view_y(*p, axis)))
-                .collect();
-            c.polyline(&pts, col, 1);
-            if let Some(&(x, y)) = pts.last() {
-                c.fill_circle(x, y, 2.0, palette::darken(palette::series(*si), 0.2));
+    fn draw_ground(&self, chart: &mut Chart2d, v: &View) -> DrawResult {
+        let rect = [
+            (v.x.0, v.y.0),
+            (v.x.1, v.y.0),
+            (v.x.1, v.y.1),
+            (v.x.0, v.y.1),
+        ];
+        // Every fill first, then the surface lines, so a wall's fill never veils the
+        // line of another (the six planes of a cage).
+        let mut lines = Vec::new();
+        for o in &self.obstacles {
+            let Shape::Plane { point, normal } = o.shape else {
+                continue;
+            };
+            let facing = normal.dot(-v.looking());
+            if facing.abs() > 1e-3 {
+                // Seen face-on: the ground under a top view, a back wall behind a side view.
+                // A plane seen from its solid side is in front of everything: left out.
+                if facing > 0.0 {
+                    chart.draw_series([Polygon::new(rect.to_vec(), GROUND.filled())])?;
+                }
+                continue;
             }
+            // Edge-on: fill the solid side and draw the surface line.
+            let (p, n) = (v.flat(point), v.flat(normal));
+            let solid = clip_half_plane(&rect, p, n);
+            if solid.len() >= 3 {
+                chart.draw_series([Polygon::new(solid, GROUND.filled())])?;
+            }
+            let along = (-n.1, n.0);
+            let far = (v.x.1 - v.x.0) * 4.0;
+            lines.push(PathElement::new(
+                vec![
+                    (p.0 - along.0 * far, p.1 - along.1 * far),
+                    (p.0 + along.0 * far, p.1 + along.1 * far),
+                ],
+                GROUND_EDGE.stroke_width(px(1.5) as u32),
+            ));
         }
+        chart.draw_series(lines)?;
+        Ok(())
     }
 
-    fn draw_targets(&self, c: &mut Canvas, chart: &Chart, axis: usize) {
-        let scale = (chart.right - chart.left) as f64 / (chart.x.1 - chart.x.0).abs();
+    fn draw_solids(&self, chart: &mut Chart2d, v: &View) -> DrawResult {
+        for o in &self.obstacles {
+            let hull = convex_hull(outline(&o.shape).into_iter().map(|p| v.flat(p)).collect());
+            if hull.len() < 3 {
+                continue;
+            }
+            let mut ring = hull.clone();
+            ring.push(hull[0]);
+            chart.draw_series([Polygon::new(hull, SOLID.filled())])?;
+            chart.draw_series([PathElement::new(
+                ring,
+                SOLID_EDGE.stroke_width(px(1.5) as u32),
+            )])?;
+        }
+        Ok(())
+    }
+
+    fn draw_paths(&self, chart: &mut Chart2d, v: &View) -> DrawResult {
+        // Fainter paths the more there are, so a dense swarm still shows its structure.
+        let alpha = (2.4 / (self.followed.len().max(1) as f64).sqrt()).clamp(0.15, 0.8);
+        for ((si, _), path) in self.followed.iter().zip(&self.paths) {
+            let col = palette::series(*si);
+            chart.draw_series([PathElement::new(
+                path.iter().map(|p| v.flat(*p)).collect::<Vec<_>>(),
+                col.mix(alpha).stroke_width(px(1.0) as u32),
+            )])?;
+        }
+        for ((si, _), path) in self.followed.iter().zip(&self.paths) {
+            let (Some(first), Some(last)) = (path.first(), path.last()) else {
+                continue;
+            };
+            let col = palette::darken(palette::series(*si), 0.25);
+            chart.draw_series([
+                Circle::new(v.flat(*first), px(3.0), col.stroke_width(px(1.2) as u32)),
+                Circle::new(v.flat(*last), px(2.2), col.filled()),
+            ])?;
+        }
+        Ok(())
+    }
+
+    fn draw_targets(&self, chart: &mut Chart2d, v: &View) -> DrawResult {
         for t in &self.targets {
-            let pts: Vec<(f64, f64)> = t
-                .keys
-                .iter()
-                .map(|k| chart.px(k.1.x as f64, view_y(k.1, axis)))
-                .collect();
-            c.polyline(&pts, TARGET, 1);
-            let (x, y) = pts[0];
-            c.fill_circle(x, y, 4.0, TARGET);
+            let pts: Vec<(f64, f64)> = t.keys.iter().map(|k| v.flat(k.1)).collect();
+            let at = pts[0];
+            chart.draw_series([PathElement::new(pts, TARGET.stroke_width(px(1.5) as u32))])?;
+            chart.draw_series([Circle::new(at, px(4.0), TARGET.filled())])?;
             if t.kind == TargetKind::Surface {
                 // A landing surface is a plane: drawn edge-on like a plane obstacle.
-                if let Some((a, b)) = plane_edge(chart, axis, t.keys[0].1, t.normal) {
-                    c.line(a.0, a.1, b.0, b.1, TARGET, 1);
+                if v.looking().dot(t.normal).abs() < 1e-3 {
+                    let n = v.flat(t.normal);
+                    let far = (v.x.1 - v.x.0) * 4.0;
+                    chart.draw_series([PathElement::new(
+                        vec![
+                            (at.0 + n.1 * far, at.1 - n.0 * far),
+                            (at.0 - n.1 * far, at.1 + n.0 * far),
+                        ],
+                        TARGET.stroke_width(px(1.5) as u32),
+                    )])?;
                 }
             } else {
-                c.circle(x, y, t.radius as f64 * scale, TARGET);
+                let r = (t.radius as f64 * v.scale()).max(5.0);
+                chart.draw_series([Circle::new(at, px(r), TARGET.stroke_width(px(1.5) as u32))])?;
             }
-            c.text(x as i64 + 7, y as i64 - 12, &t.name, TARGET, 1);
+            // The name beside the target's circle, on a veil so paths do not garble it.
+            let style = text(14.0, TARGET).pos(Pos::new(HPos::Left, VPos::Center));
+            let (tw, th) = chart.plotting_area().estimate_text_size(&t.name, &style)?;
+            let dx = px((t.radius as f64 * v.scale()).max(5.0) + 5.0);
+            let (tw, th) = (tw as i32, th as i32);
+            chart.draw_series([EmptyElement::at(at)
+                + Rectangle::new(
+                    [
+                        (dx - px(2.0), -th / 2 - px(2.0)),
+                        (dx + tw + px(2.0), th / 2 + px(2.0)),
+                    ],
+                    palette::WHITE.mix(0.8).filled(),
+                )
+                + Text::new(t.name.clone(), (dx, 0), style)])?;
         }
-    }
-
-    fn draw_obstacles(&self, c: &mut Canvas, chart: &Chart, axis: usize) {
-        let scale = (chart.right - chart.left) as f64 / (chart.x.1 - chart.x.0).abs();
-        let col = palette::GREY;
-        let to = |p: Vec3| chart.px(p.x as f64, view_y(p, axis));
-        for o in &self.obstacles {
-            match o.shape {
-                Shape::Sphere { center, radius } => {
-                    let (x, y) = to(center);
-                    c.circle(x, y, radius as f64 * scale, col);
-                }
-                Shape::Box {
-                    center,
-                    half,
-                    rotation,
-                } => {
-                    let corner = |i: usize| {
-                        let s = Vec3::new(
-                            if i & 1 == 0 { -1.0 } else { 1.0 },
-                            if i & 2 == 0 { -1.0 } else { 1.0 },
-                            if i & 4 == 0 { -1.0 } else { 1.0 },
-                        );
-                        to(center + rotation * (half * s))
-                    };
-                    for a in 0..8 {
-                        for bit in [1, 2, 4] {
-                            if a & bit == 0 {
-                                let (p, q) = (corner(a), corner(a | bit));
-                                c.line(p.0, p.1, q.0, q.1, col, 1);
-                            }
-                        }
-                    }
-                }
-                Shape::Capsule { a, b, radius } => {
-                    let (pa, pb) = (to(a), to(b));
-                    let r = radius as f64 * scale;
-                    c.circle(pa.0, pa.1, r, col);
-                    c.circle(pb.0, pb.1, r, col);
-                    let (dx, dy) = (pb.0 - pa.0, pb.1 - pa.1);
-                    let l = (dx * dx + dy * dy).sqrt();
-                    if l > 1e-9 {
-                        let (nx, ny) = (-dy / l * r, dx / l * r);
-                        c.line(pa.0 + nx, pa.1 + ny, pb.0 + nx, pb.1 + ny, col, 1);
-                        c.line(pa.0 - nx, pa.1 - ny, pb.0 - nx, pb.1 - ny, col, 1);
-                    }
-                }
-                Shape::Cylinder {
-                    center,
-                    radius,
-                    half_height,
-                    rotation,
-                } => {
-                    let ring = |h: f32| -> Vec<(f64, f64)> {
-                        (0..=32)
-                            .map(|k| {
-                                let a = k as f32 / 32.0 * std::f32::consts::TAU;
-                                let local = Vec3::new(radius * a.cos(), h, radius * a.sin());
-                                to(center + rotation * local)
-                            })
-                            .collect()
-                    };
-                    c.polyline(&ring(half_height), col, 1);
-                    c.polyline(&ring(-half_height), col, 1);
-                    for k in 0..4 {
-                        let a = k as f32 * std::f32::consts::FRAC_PI_2;
-                        let off = Vec3::new(radius * a.cos(), 0.0, radius * a.sin());
-                        let p = to(center + rotation * (off + Vec3::Y * half_height));
-                        let q = to(center + rotation * (off - Vec3::Y * half_height));
-                        c.line(p.0, p.1, q.0, q.1, col, 1);
-                    }
-                }
-                Shape::Plane { point, normal } => {
-                    if let Some((p, q)) = plane_edge(chart, axis, point, normal) {
-                        c.line(p.0, p.1, q.0, q.1, col, 2);
-                    }
-                }
-            }
-        }
+        Ok(())
     }
 }
 
-const TARGET: Rgb = [180, 30, 30];
+type Chart2d<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
 
-/// The screen end points of a plane seen edge-on, or `None` when the view does not run
-/// along it (then it covers the whole view or none of it).
-fn plane_edge(
-    chart: &Chart,
-    axis: usize,
-    point: Vec3,
-    normal: Vec3,
-) -> Option<((f64, f64), (f64, f64))> {
-    // The view direction: −Y for the top view, −Z for the side view.
-    let view = if axis == 2 { Vec3::Y } else { Vec3::Z };
-    if normal.dot(view).abs() > 1e-3 {
-        return None;
+fn shape_name(s: &Shape) -> &'static str {
+    match s {
+        Shape::Sphere { .. } => "sphere",
+        Shape::Box { .. } => "box",
+        Shape::Capsule { .. } => "capsule",
+        Shape::Cylinder { .. } => "cylinder",
+        Shape::Plane { .. } => "plane",
     }
-    let along = normal.cross(view).normalize_or_zero();
-    let far = (chart.x.1 - chart.x.0).abs() as f32 * 4.0;
-    let to = |p: Vec3| chart.px(p.x as f64, view_y(p, axis));
-    Some((to(point - along * far), to(point + along * far)))
 }
 
-/// The vertical screen coordinate of a view: z for the top view, y for the side view.
-fn view_y(p: Vec3, axis: usize) -> f64 {
-    if axis == 2 { p.z as f64 } else { p.y as f64 }
+/// Points whose convex hull, seen from any direction, is the outline of a solid: box
+/// corners, cylinder rims, and circles around each sphere (capsule end) in the three
+/// coordinate planes, the outline of a sphere seen along an axis. Empty for a plane.
+fn outline(s: &Shape) -> Vec<Vec3> {
+    const N: usize = 48;
+    let circle = |c: Vec3, r: f32, u: Vec3, w: Vec3| {
+        (0..N).map(move |k| {
+            let a = k as f32 / N as f32 * std::f32::consts::TAU;
+            c + (u * a.cos() + w * a.sin()) * r
+        })
+    };
+    let ball = |c: Vec3, r: f32| {
+        circle(c, r, Vec3::X, Vec3::Y)
+            .chain(circle(c, r, Vec3::X, Vec3::Z))
+            .chain(circle(c, r, Vec3::Y, Vec3::Z))
+            .collect::<Vec<_>>()
+    };
+    match *s {
+        Shape::Sphere { center, radius } => ball(center, radius),
+        Shape::Box {
+            center,
+            half,
+            rotation,
+        } => (0..8)
+            .map(|i| {
+                let s = Vec3::new(
+                    if i & 1 == 0 { -1.0 } else { 1.0 },
+                    if i & 2 == 0 { -1.0 } else { 1.0 },
+                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                center + rotation * (half * s)
+            })
+            .collect(),
+        Shape::Capsule { a, b, radius } => {
+            let mut pts = ball(a, radius);
+            pts.extend(ball(b, radius));
+            pts
+        }
+        Shape::Cylinder {
+            center,
+            radius,
+            half_height,
+            rotation,
+        } => {
+            let (u, w, up) = (rotation * Vec3::X, rotation * Vec3::Z, rotation * Vec3::Y);
+            circle(center + up * half_height, radius, u, w)
+                .chain(circle(center - up * half_height, radius, u, w))
+                .collect()
+        }
+        Shape::Plane { .. } => Vec::new(),
+    }
+}
+
+/// Convex hull (Andrew's monotone chain), counter-clockwise, without repeated points.
+fn convex_hull(mut pts: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    pts.retain(|p| p.0.is_finite() && p.1.is_finite());
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(pts.len() * 2);
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// The part of polygon `poly` where (q − p)·n ≤ 0 (Sutherland–Hodgman, one edge).
+fn clip_half_plane(poly: &[(f64, f64)], p: (f64, f64), n: (f64, f64)) -> Vec<(f64, f64)> {
+    let side = |q: (f64, f64)| (q.0 - p.0) * n.0 + (q.1 - p.1) * n.1;
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (sa, sb) = (side(a), side(b));
+        if sa <= 0.0 {
+            out.push(a);
+        }
+        if (sa < 0.0 && sb > 0.0) || (sa > 0.0 && sb < 0.0) {
+            let t = sa / (sa - sb);
+            out.push((a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t));
+        }
+    }
+    out
 }
 
 impl CacheWriter for PreviewWriter {
@@ -318,7 +544,7 @@ impl CacheWriter for PreviewWriter {
 
     fn finish(self: Box<Self>) -> Result<Vec<SealedFile>> {
         // Sealed, not committed: the bake renames it with every other cache file.
-        let bytes = self.render().encode_png()?;
+        let bytes = self.render()?.encode_png()?;
         let mut f = AtomicFile::create(&self.path)?;
         f.write_all(&bytes).map_err(|e| Error::io(&self.path, e))?;
         Ok(vec![f.seal()?])
@@ -385,6 +611,38 @@ keys = [{ frame = 1, position = [0.0, 1.2, 0.0] }, { frame = 30, position = [0.4
         let bytes = std::fs::read(&pa).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         assert_eq!(bytes, std::fs::read(&pb).unwrap());
+    }
+
+    #[test]
+    fn obstacles_are_filled_over_the_ground() {
+        let dir = tempfile::tempdir().unwrap();
+        let shot = crate::shot::parse(SHOT, Path::new("tiny.toml"), Path::new(".")).unwrap();
+        let sim = Simulation::new(&shot);
+        let w = PreviewWriter::create(&shot, &sim.meta(), dir.path()).unwrap();
+        let (fig, [top, side]) = w.render_views().unwrap();
+        let at = |v: &View, p: Vec3| {
+            let (x, y) = v.pixel(p);
+            fig.get(x as u32, y as u32).unwrap()
+        };
+        let lum = |c: [u8; 3]| c.iter().map(|&v| v as u32).sum::<u32>() / 3;
+        // Seen from above, the ground (normal +y) covers the view; from the side it is
+        // the half below y = 0.
+        let tinted = |c: [u8; 3]| c[0] as i32 > c[2] as i32 + 20 && lum(c) < 240;
+        let ground = at(&top, Vec3::new(top.x.0 as f32 + 0.05, 0.0, 0.0));
+        assert!(tinted(ground), "{ground:?}");
+        let below = at(&side, Vec3::new(side.x.0 as f32 + 0.05, -0.05, 0.0));
+        assert!(tinted(below), "{below:?}");
+        let above = at(&side, Vec3::new(side.x.0 as f32 + 0.05, 0.05, 0.0));
+        assert!(!tinted(above) && lum(above) > 200, "{above:?}");
+        // The box stands out against the ground in both views.
+        for v in [&top, &side] {
+            let b = at(v, Vec3::new(-0.5, 0.3, 0.0));
+            assert!(lum(b) + 40 < lum(ground), "{b:?} vs {ground:?}");
+        }
+        // Both plot areas are squares of the same scale: 1 m is as long across as down.
+        let (a, b) = (top.pixel(Vec3::ZERO), top.pixel(Vec3::new(1.0, 0.0, 1.0)));
+        assert!(((b.0 - a.0) - (b.1 - a.1)).abs() < 1e-6 && b.0 > a.0);
+        assert_eq!(top.x, side.x);
     }
 
     #[test]

@@ -1,33 +1,39 @@
-//! The 8×8 bitmap font of the `font8x8` crate: basic Latin, Latin-1 (for ², ³, µ, °) and
-//! Greek (for ω, α, ρ, κ), so axis labels can carry units and symbols without system fonts.
+//! The bundled font (Roboto, subset; see assets/fonts/README.md), registered with
+//! `plotters` under the family name "sans-serif" that its charts use by default.
 
-use font8x8::legacy::{BASIC_LEGACY, GREEK_LEGACY, LATIN_LEGACY};
+use super::figure::SUPERSAMPLE;
+use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle, register_font};
+use std::sync::Once;
 
-/// Glyph cell size in pixels at scale 1.
-pub const GLYPH: u32 = 8;
+const REGULAR: &[u8] = include_bytes!("../../assets/fonts/Roboto-Regular.ttf");
+const MEDIUM: &[u8] = include_bytes!("../../assets/fonts/Roboto-Medium.ttf");
+const FAMILY: &str = "sans-serif";
 
-/// The 8 rows of a character; bit `i` of a row is column `i` from the left.
-/// Characters the font lacks are drawn as `?` so a missing glyph is visible, not blank.
-pub fn glyph(c: char) -> [u8; 8] {
-    let u = c as u32;
-    match u {
-        0x20..=0x7E => BASIC_LEGACY[u as usize],
-        0xA0..=0xFF => LATIN_LEGACY[(u - 0xA0) as usize],
-        0x390..=0x3C9 => GREEK_LEGACY[(u - 0x390) as usize],
-        _ => BASIC_LEGACY['?' as usize],
-    }
+/// Registers the fonts once per process (the registry is global and shared by threads).
+pub(super) fn register() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Both files are compiled in and parsed by the tests, so this cannot fail at run
+        // time; a failure here is a broken build.
+        let ok = register_font(FAMILY, FontStyle::Normal, REGULAR).is_ok()
+            && register_font(FAMILY, FontStyle::Bold, MEDIUM).is_ok();
+        assert!(
+            ok,
+            "the bundled fonts in assets/fonts are not valid TrueType"
+        );
+    });
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// Regular text `size` output pixels high (the font's ascent to descent), in `color`.
+pub fn text(size: f64, color: RGBColor) -> TextStyle<'static> {
+    (FAMILY, size * SUPERSAMPLE as f64)
+        .into_font()
+        .color(&color)
+}
 
-    #[test]
-    fn space_is_blank_and_letters_are_not() {
-        assert_eq!(glyph(' '), [0; 8]);
-        assert_ne!(glyph('A'), [0; 8]);
-        assert_ne!(glyph('ω'), [0; 8]);
-        assert_ne!(glyph('²'), [0; 8]);
-        assert_eq!(glyph('\u{4e00}'), glyph('?'));
-    }
+/// Medium-weight text for titles.
+pub fn bold(size: f64, color: RGBColor) -> TextStyle<'static> {
+    (FAMILY, size * SUPERSAMPLE as f64, FontStyle::Bold)
+        .into_font()
+        .color(&color)
 }

@@ -1,49 +1,76 @@
-//! A small raster plotting library: an RGB canvas with lines, shapes and bitmap text,
-//! a chart frame with nice ticks, legends, and deterministic PNG output.
+//! Figures drawn with the `plotters` crate: the bake preview, the `eval` distribution
+//! figure and the `calibrate` fitness figure.
 //!
-//! Used by `beeswarm eval` (distribution figures), `beeswarm calibrate` (fitness over
-//! generations) and the bake preview (top and side views of trajectories). It needs no
-//! system fonts (text is drawn with the `font8x8` bitmap font) and its PNG bytes depend
-//! only on the pixels, so the same figure is byte-identical on every machine.
+//! This module adds what `plotters` leaves to its users: the bundled font (no system
+//! fonts, so a figure looks the same on every machine), supersampled anti-aliasing,
+//! deterministic PNG encoding, a figure-wide legend and the shared palette. Sizes given to
+//! the helpers here are in output pixels; [`px`] converts them to the supersampled canvas.
 
-mod canvas;
-mod chart;
+mod figure;
 mod font;
+mod legend;
 
-pub use canvas::{Canvas, Rgb};
-pub use chart::{Chart, Legend, LegendMark, nice_ticks};
-pub use font::{GLYPH, glyph};
+pub use figure::{Area, DrawResult, Figure, SUPERSAMPLE, px};
+pub use font::{bold, text};
+pub use legend::{Legend, Mark};
+
+/// A tick label with no more decimals than needed ("0.5", "12", "−0.25"), a true minus
+/// sign, and powers of ten for very large or small values.
+pub fn tick_label(v: f64) -> String {
+    let a = v.abs();
+    let s = if a < 1e-12 {
+        "0".to_owned()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.0e}")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    };
+    s.replace('-', "\u{2212}")
+}
 
 /// Colours used across figures, chosen to stay distinguishable on white and when printed.
 pub mod palette {
-    use super::Rgb;
-    pub const WHITE: Rgb = [255, 255, 255];
-    pub const BLACK: Rgb = [0, 0, 0];
-    pub const GREY: Rgb = [128, 128, 128];
-    pub const LIGHT_GREY: Rgb = [215, 215, 215];
-    pub const GRID: Rgb = [235, 235, 235];
+    use plotters::style::RGBColor;
+    pub const WHITE: RGBColor = RGBColor(255, 255, 255);
+    pub const BLACK: RGBColor = RGBColor(0, 0, 0);
+    pub const TEXT: RGBColor = RGBColor(30, 30, 30);
+    pub const GREY: RGBColor = RGBColor(128, 128, 128);
+    pub const LIGHT_GREY: RGBColor = RGBColor(205, 205, 205);
+    pub const GRID: RGBColor = RGBColor(228, 228, 228);
     /// Okabe–Ito colour-blind-safe series colours.
-    pub const SERIES: [Rgb; 7] = [
-        [0, 114, 178],   // blue
-        [213, 94, 0],    // vermillion
-        [0, 158, 115],   // bluish green
-        [204, 121, 167], // reddish purple
-        [230, 159, 0],   // orange
-        [86, 180, 233],  // sky blue
-        [240, 228, 66],  // yellow
+    pub const SERIES: [RGBColor; 7] = [
+        RGBColor(0, 114, 178),   // blue
+        RGBColor(213, 94, 0),    // vermillion
+        RGBColor(0, 158, 115),   // bluish green
+        RGBColor(204, 121, 167), // reddish purple
+        RGBColor(230, 159, 0),   // orange
+        RGBColor(86, 180, 233),  // sky blue
+        RGBColor(240, 228, 66),  // yellow
     ];
     /// The `i`-th series colour, cycling.
-    pub fn series(i: usize) -> Rgb {
+    pub fn series(i: usize) -> RGBColor {
         SERIES[i % SERIES.len()]
     }
-    /// Mixes `c` towards white by `t` in [0, 1].
-    pub fn lighten(c: Rgb, t: f64) -> Rgb {
-        let t = t.clamp(0.0, 1.0);
-        c.map(|v| (v as f64 + (255.0 - v as f64) * t).round() as u8)
-    }
     /// Mixes `c` towards black by `t` in [0, 1].
-    pub fn darken(c: Rgb, t: f64) -> Rgb {
+    pub fn darken(c: RGBColor, t: f64) -> RGBColor {
         let t = t.clamp(0.0, 1.0);
-        c.map(|v| (v as f64 * (1.0 - t)).round() as u8)
+        let d = |v: u8| (v as f64 * (1.0 - t)).round() as u8;
+        RGBColor(d(c.0), d(c.1), d(c.2))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick_label(0.5), "0.5");
+        assert_eq!(tick_label(10.0), "10");
+        assert_eq!(tick_label(-0.25), "\u{2212}0.25");
+        assert_eq!(tick_label(0.30000000000000004), "0.3");
+        assert_eq!(tick_label(1e-17), "0");
+        assert_eq!(tick_label(2e6), "2e6");
     }
 }
