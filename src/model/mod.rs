@@ -17,6 +17,7 @@ pub mod brownian;
 pub mod collision;
 pub mod context;
 pub mod curl;
+pub mod fastswarm;
 pub mod flight;
 pub mod params;
 pub mod targets;
@@ -69,6 +70,7 @@ registry! {$
     Curl => crate::model::curl::CurlModel,
     Brownian => crate::model::brownian::BrownianModel,
     Boids => crate::model::boids::BoidsModel,
+    Fastswarm => crate::model::fastswarm::FastswarmModel,
 }
 
 impl ModelKind {
