@@ -165,7 +165,10 @@ mod tests {
         let mut e = Energy::new(2.5, dt, Vec3::ZERO, Vec3::X * 0.2);
         e.direction(1.0, Vec3::Z);
         assert!(e.of(Vec3::Z * 0.2, Vec3::ZERO) < e.of(Vec3::X * 0.2, Vec3::ZERO));
-        assert!((e.of(Vec3::Z * 0.2, Vec3::ZERO) - 1.0).abs() < 1e-6, "e^0 = 1");
+        assert!(
+            (e.of(Vec3::Z * 0.2, Vec3::ZERO) - 1.0).abs() < 1e-6,
+            "e^0 = 1"
+        );
         // Repulsion: moving away from a close neighbour costs less.
         let mut e = Energy::new(2.5, dt, Vec3::ZERO, Vec3::ZERO);
         e.repulsion(1.0, 0.03, &[Vec3::X * 0.01]);

@@ -213,9 +213,7 @@ impl Model for FastswarmModel {
         }
         e.acceleration(p.w_acc as f32, self.db.mean_accel);
 
-        let free = cx
-            .rng(TURN_STREAM, i)
-            .range(0.0, std::f32::consts::TAU);
+        let free = cx.rng(TURN_STREAM, i).range(0.0, std::f32::consts::TAU);
         let ri = self.radius * b.fly.c.size;
         let clear = |q: Vec3| cx.obstacle_queries(q).all(|o| o.distance >= ri);
         let chosen = selection::select(&e, self.db.candidates(vel.length()), free, dt, clear);

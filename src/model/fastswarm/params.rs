@@ -64,11 +64,6 @@ pub const PRESETS: &[Preset] = &[
     Preset {
         name: "shape",
         doc: "Table 1, shape constraint (heart / star): the swarm's targets are key points, w = 1, 0.5, 0, 1, 1, 0, 1, 1",
-        values: &[
-            ("w_oa", 0.5),
-            ("w_cos", 0.0),
-            ("w_n", 1.0),
-            ("w_user", 1.0),
-        ],
+        values: &[("w_oa", 0.5), ("w_cos", 0.0), ("w_n", 1.0), ("w_user", 1.0)],
     },
 ];

@@ -122,7 +122,7 @@ mod tests {
         e.attraction(1.0, 0.08, &[Vec3::Y * 0.2]);
         let c = select(&e, &samples, 0.0, 0.02, |_| true).unwrap();
         assert_eq!(c.index, 2);
-        let c = select(&e, &samples, 0.0, 0.02, |p| p.y < 0.005).unwrap();
+        let c = select(&e, &samples, 0.0, 0.02, |p| p.y < 0.003).unwrap();
         assert_eq!(c.index, 0);
         assert!(select(&e, &samples, 0.0, 0.02, |_| false).is_none());
     }

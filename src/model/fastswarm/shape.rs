@@ -55,8 +55,16 @@ mod tests {
     fn arrival_moves_the_goal_along_the_curve_both_ways() {
         let t = Tour { goal: 0, way: -1 };
         assert_eq!(t.advance(Vec3::ZERO, Vec3::X, 0.1, 5), t, "not there yet");
-        assert_eq!(t.advance(Vec3::X, Vec3::X, 0.1, 5).goal, 4, "wraps backwards");
+        assert_eq!(
+            t.advance(Vec3::X, Vec3::X, 0.1, 5).goal,
+            4,
+            "wraps backwards"
+        );
         let t = Tour { goal: 4, way: 1 };
-        assert_eq!(t.advance(Vec3::X, Vec3::X, 0.1, 5).goal, 0, "wraps forwards");
+        assert_eq!(
+            t.advance(Vec3::X, Vec3::X, 0.1, 5).goal,
+            0,
+            "wraps forwards"
+        );
     }
 }
