@@ -221,3 +221,63 @@ fn debug_series() {
         }
     }
 }
+
+/// The shipped database is what `beeswarm fastswarm-db` builds from the recording, byte
+/// for byte (skipped, saying so, where the recording is absent).
+#[test]
+fn the_shipped_database_rebuilds_from_the_recording() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let rec = root.join("../shared/data/mosquito_flights.csv");
+    if !rec.exists() {
+        println!("skipped: {} is absent", rec.display());
+        return;
+    }
+    let shipped = std::fs::read_to_string(root.join("src/model/fastswarm/mosquito_db.csv"))
+        .expect("the shipped database");
+    let out = tempfile::tempdir().unwrap();
+    let db = out.path().join("db.csv");
+    let mut args: Vec<String> = vec![
+        "fastswarm-db".into(),
+        rec.to_str().unwrap().into(),
+        "--out".into(),
+        db.to_str().unwrap().into(),
+    ];
+    // The provenance lines the command cannot know (source and licence) from the header.
+    for line in shipped.lines() {
+        if let Some(note) = line
+            .strip_prefix("# ")
+            .filter(|l| l.starts_with("Source:") || l.starts_with("Licence:"))
+        {
+            args.push("--note".into());
+            args.push(note.into());
+        }
+    }
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        std::fs::read_to_string(&db).unwrap() == shipped,
+        "the rebuild differs"
+    );
+    // Bad input: exit code 2 and a message naming the file.
+    let bad = out.path().join("bad.csv");
+    std::fs::write(&bad, "a,b\n1,2\n").unwrap();
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .args([
+            "fastswarm-db",
+            bad.to_str().unwrap(),
+            "--out",
+            db.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(err.contains("bad.csv") && err.contains("header"), "{err}");
+}

@@ -3,7 +3,7 @@
 
 use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
-use crate::eval::tracks;
+use crate::eval::{resample, tracks};
 use crate::model::fastswarm::database::{self, BuildOptions};
 use clap::Args;
 use std::io::Write as _;
@@ -48,12 +48,15 @@ pub fn run(a: FastswarmDbArgs) -> Result<()> {
         )));
     }
     let ds = tracks::read(&a.tracks)?;
+    let series = resample::resample(&ds, a.dt);
+    let velocities: Vec<&[glam::DVec3]> = series.iter().map(|u| u.velocity.as_slice()).collect();
     let opts = BuildOptions {
         dt: a.dt,
+        z_up: ds.format == tracks::TrackFormat::Splined,
         max_samples: a.samples,
         min_speed: a.min_speed,
     };
-    let db = database::build(&ds, &opts)
+    let db = database::build(&velocities, &opts)
         .map_err(|e| Error::input(format!("{}: {e}", a.tracks.display())))?;
     let name = a
         .tracks

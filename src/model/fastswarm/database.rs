@@ -9,8 +9,6 @@
 //! sorted by speed. Values are rounded to 1 mm/s and 1 mm/s², so a database is a few
 //! tens of kilobytes and the same recording always gives the same bytes.
 
-use crate::eval::resample;
-use crate::eval::tracks::{Dataset, TrackFormat};
 use glam::{DVec3, Vec3};
 use std::fmt::Write as _;
 
@@ -46,8 +44,10 @@ pub const DEFAULT_TEXT: &str = include_str!("mosquito_db.csv");
 /// Options of [`build`].
 #[derive(Clone, Copy, Debug)]
 pub struct BuildOptions {
-    /// The simulation step to resample the recording to, s.
+    /// The step the velocity series are sampled at (the simulation step), s.
     pub dt: f64,
+    /// The series are Z-up (the splined recordings), not Y-up (our tracks CSV).
+    pub z_up: bool,
     /// At most this many samples, chosen evenly over the speed ranks.
     pub max_samples: usize,
     /// Samples slower than this are an insect at rest (no heading) and are left out, m/s.
@@ -58,6 +58,7 @@ impl Default for BuildOptions {
     fn default() -> Self {
         BuildOptions {
             dt: 0.02,
+            z_up: true,
             max_samples: 1200,
             min_speed: 0.01,
         }
@@ -67,11 +68,8 @@ impl Default for BuildOptions {
 /// A recording's axes mapped to the world's Y-up: the splined recordings are Z-up (their Z
 /// spans the cage's 1.2 m height, and the floor is at z ≈ 0), so (x, y, z) → (x, z, −y),
 /// a rotation that keeps them right-handed. Our own tracks CSV is already Y-up.
-fn to_y_up(format: TrackFormat, v: DVec3) -> DVec3 {
-    match format {
-        TrackFormat::Splined => DVec3::new(v.x, v.z, -v.y),
-        TrackFormat::Beeswarm | TrackFormat::Memory => v,
-    }
+fn to_y_up(z_up: bool, v: DVec3) -> DVec3 {
+    if z_up { DVec3::new(v.x, v.z, -v.y) } else { v }
 }
 
 /// Rounds to 1 mm (/s, /s²): what the file stores.
@@ -80,19 +78,20 @@ fn round3(x: f64) -> f64 {
     if r == 0.0 { 0.0 } else { r } // no "-0"
 }
 
-/// Builds a database from recorded tracks: each track resampled to `opts.dt` (never across
-/// a gap), a = (v_{k+1} − v_k) / dt by forward differences (the paper's), axes to Y-up,
-/// at-rest samples dropped, then `max_samples` taken evenly over the speed ranks so the
-/// speed distribution is kept. Deterministic.
-pub fn build(ds: &Dataset, opts: &BuildOptions) -> Result<Database, String> {
+/// Builds a database from recorded velocity series, each uninterrupted and sampled every
+/// `opts.dt` (`beeswarm fastswarm-db` resamples the tracks, never across a gap):
+/// a = (v_{k+1} − v_k) / dt by forward differences (the paper's), axes to Y-up, at-rest
+/// samples dropped, then `max_samples` taken evenly over the speed ranks so the speed
+/// distribution is kept. Deterministic.
+pub fn build(series: &[&[DVec3]], opts: &BuildOptions) -> Result<Database, String> {
     if !(opts.dt > 0.0 && opts.dt.is_finite()) {
         return Err(format!("expected a positive step, found {}", opts.dt));
     }
     let mut all: Vec<(f64, [f64; 6])> = Vec::new();
-    for u in resample::resample(ds, opts.dt) {
-        for k in 0..u.velocity.len().saturating_sub(1) {
-            let v = to_y_up(ds.format, u.velocity[k]);
-            let a = to_y_up(ds.format, (u.velocity[k + 1] - u.velocity[k]) / opts.dt);
+    for u in series {
+        for k in 0..u.len().saturating_sub(1) {
+            let v = to_y_up(opts.z_up, u[k]);
+            let a = to_y_up(opts.z_up, (u[k + 1] - u[k]) / opts.dt);
             let s = v.length();
             if s < opts.min_speed || !v.is_finite() || !a.is_finite() {
                 continue;
