@@ -216,7 +216,7 @@ impl Model for FastswarmModel {
         let free = cx.rng(TURN_STREAM, i).range(0.0, std::f32::consts::TAU);
         let ri = self.radius * b.fly.c.size;
         let clear = |q: Vec3| cx.obstacle_queries(q).all(|o| o.distance >= ri);
-        let chosen = selection::select(&e, self.db.candidates(vel.length()), free, dt, clear);
+        let chosen = selection::select(&e, self.db.candidates(vel.length()), free, clear);
         // With every candidate refused (boxed in by obstacles) the agent keeps its
         // velocity and the shared guard stops it at the surface.
         let v = chosen.map_or(vel, |c| c.v);

@@ -11,7 +11,7 @@
 //!
 //! Conventions: world Y-up, m/s, m/s².
 
-use super::database::Sample;
+use super::database::{Prepared, Sample};
 use super::energies::Energy;
 use glam::{Quat, Vec3};
 
@@ -22,8 +22,9 @@ fn turn(v: Vec3, c: f32, s: f32) -> Vec3 {
 }
 
 /// (cos, sin) of the rotation about +Y taking the horizontal direction of `from` to that
-/// of `to`; identity where either has none.
-#[inline]
+/// of `to`; identity where either has none. (`select` does the same with unit directions
+/// prepared in advance.)
+#[cfg(test)]
 fn turn_between(from: Vec3, to: Vec3) -> (f32, f32) {
     let (fx, fz, tx, tz) = (from.x, from.z, to.x, to.z);
     let (lf, lt) = ((fx * fx + fz * fz).sqrt(), (tx * tx + tz * tz).sqrt());
@@ -51,19 +52,33 @@ pub struct Choice {
 /// when every candidate is refused.
 pub fn select(
     e: &Energy,
-    samples: &[Sample],
+    samples: &[Prepared],
     free_angle: f32,
-    dt: f32,
     allowed: impl Fn(Vec3) -> bool,
 ) -> Option<Choice> {
     let (fs, fc) = free_angle.sin_cos();
+    let (hx, hz) = {
+        let h = (e.v.x * e.v.x + e.v.z * e.v.z).sqrt();
+        if h > 1e-6 {
+            (e.v.x / h, e.v.z / h)
+        } else {
+            (0.0, 0.0)
+        }
+    };
     let mut best: Option<Choice> = None;
     for (index, d) in samples.iter().enumerate() {
-        let (cc, cs) = turn_between(d.v - d.a * dt, e.v);
+        // The rotation taking the sample's previous heading to the agent's (turn_between
+        // with both directions already unit); none where either has no heading.
+        let (bx, bz) = d.back;
+        let (cc, cs) = if (bx == 0.0 && bz == 0.0) || (hx == 0.0 && hz == 0.0) {
+            (1.0, 0.0)
+        } else {
+            (bx * hx + bz * hz, bz * hx - bx * hz)
+        };
         for (c, s) in [(cc, cs), (fc, fs)] {
             let v = turn(d.v, c, s);
             let a = turn(d.a, c, s);
-            let energy = e.of(v, a);
+            let energy = e.of_unit(v, turn(d.v_unit, c, s), turn(d.a_unit, c, s), d.a_len);
             if energy.is_finite()
                 && best.is_none_or(|b| energy < b.energy)
                 && allowed(e.p + v * e.dt)
@@ -110,20 +125,23 @@ mod tests {
 
     #[test]
     fn the_minimum_is_picked_and_refused_candidates_skipped() {
-        let samples: Vec<Sample> = [0.1f32, 0.2, 0.3]
+        let samples: Vec<Prepared> = [0.1f32, 0.2, 0.3]
             .iter()
-            .map(|&s| Sample {
-                v: Vec3::new(0.0, s, 0.0),
-                a: Vec3::ZERO,
+            .map(|&s| {
+                let d = Sample {
+                    v: Vec3::new(0.0, s, 0.0),
+                    a: Vec3::ZERO,
+                };
+                Prepared::new(d, 0.02)
             })
             .collect();
         // Prefers going up fast? A direction term cannot tell speeds apart; attraction can.
         let mut e = Energy::new(2.5, 0.02, Vec3::ZERO, Vec3::Y * 0.2);
         e.attraction(1.0, 0.08, &[Vec3::Y * 0.2]);
-        let c = select(&e, &samples, 0.0, 0.02, |_| true).unwrap();
+        let c = select(&e, &samples, 0.0, |_| true).unwrap();
         assert_eq!(c.index, 2);
-        let c = select(&e, &samples, 0.0, 0.02, |p| p.y < 0.003).unwrap();
+        let c = select(&e, &samples, 0.0, |p| p.y < 0.003).unwrap();
         assert_eq!(c.index, 0);
-        assert!(select(&e, &samples, 0.0, 0.02, |_| false).is_none());
+        assert!(select(&e, &samples, 0.0, |_| false).is_none());
     }
 }
