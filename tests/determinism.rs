@@ -27,6 +27,11 @@ name = "brownian"
 count = 60
 model = "brownian"
 [[swarm]]
+name = "fast"
+count = 60
+model = "fastswarm"
+spawn = { shape = "box", center = [0.3, 1, 0.3], size = [0.4, 0.4, 0.4] }
+[[swarm]]
 name = "crowd"
 count = 400
 spawn = { shape = "box", center = [0.6, 1.5, 0], size = [0.05, 0.05, 0.05] }

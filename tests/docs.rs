@@ -31,7 +31,7 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
     let model = |name: &str| models.iter().find(|m| m["name"] == name).unwrap();
     assert_eq!(
         names(&doc, "models"),
-        ["bee", "curl", "brownian", "boids", "field"]
+        ["bee", "curl", "brownian", "boids", "field", "fastswarm"]
     );
     assert_eq!(names(model("field"), "channels"), ["speed", "cost", "mde"]);
     assert_eq!(
@@ -44,6 +44,13 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
             "locusts"
         ]
     );
+    // Paper 003: Table 1's scenarios as presets, and its two channels.
+    let fast = model("fastswarm");
+    assert_eq!(
+        names(fast, "presets"),
+        ["aggregation", "mating", "escaping", "shape"]
+    );
+    assert_eq!(names(fast, "channels"), ["speed", "startled"]);
     let bee = model("bee");
     let params = names(bee, "params");
     assert!(

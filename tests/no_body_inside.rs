@@ -55,7 +55,7 @@ fn obstacle(rng: &mut Rng) -> String {
 
 fn scene(case: u64) -> String {
     let mut rng = Rng::new(2026, case, 0);
-    let model = ["bee", "brownian", "boids", "curl"][(rng.f32() * 4.0) as usize % 4];
+    let model = ["bee", "brownian", "boids", "curl", "fastswarm"][(rng.f32() * 5.0) as usize % 5];
     // Cases from 200 on fly paper 001's field model, towards a goal across the scene.
     let model = if case >= 200 { "field" } else { model };
     // Speeds up to the documented 50 m/s, the noise lattice down to its 1 mm minimum.
@@ -80,6 +80,8 @@ fn scene(case: u64) -> String {
                 speed * scale
             )
         }
+        // Flies recorded velocities: no speed to set.
+        "fastswarm" => format!("{{ noise_cell = {:.4} }}", rng.range(0.001, 0.2)),
         _ => format!("{{ speed = {speed:.2} }}"),
     };
     let mut src = format!(

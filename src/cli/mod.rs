@@ -1,9 +1,10 @@
-//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`. `main.rs` only calls
+//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`, `fastswarm-db`. `main.rs` only calls
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
 mod bench;
 mod check;
+mod fastswarm_db;
 pub mod models;
 mod resources;
 
@@ -26,6 +27,7 @@ pub enum Command {
     Models(models::ModelsArgs),
     Eval(crate::eval::EvalArgs),
     Calibrate(crate::eval::CalibrateArgs),
+    FastswarmDb(fastswarm_db::FastswarmDbArgs),
 }
 
 /// Parses arguments, runs the command, prints any error, returns the exit code.
@@ -45,6 +47,7 @@ pub fn main() -> i32 {
         Command::Models(a) => models::run(a),
         Command::Eval(a) => crate::eval::run_eval(&a),
         Command::Calibrate(a) => crate::eval::run_calibrate(&a),
+        Command::FastswarmDb(a) => fastswarm_db::run(a),
     };
     match result {
         Ok(()) => 0,

@@ -17,6 +17,7 @@ pub mod brownian;
 pub mod collision;
 pub mod context;
 pub mod curl;
+pub mod fastswarm;
 pub mod field;
 pub mod flight;
 pub mod params;
@@ -71,6 +72,7 @@ registry! {$
     Brownian => crate::model::brownian::BrownianModel,
     Boids => crate::model::boids::BoidsModel,
     Field => crate::model::field::FieldModel,
+    Fastswarm => crate::model::fastswarm::FastswarmModel,
 }
 
 impl ModelKind {
