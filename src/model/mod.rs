@@ -21,6 +21,7 @@ pub mod flight;
 pub mod params;
 pub mod targets;
 pub mod vision;
+pub mod zonal;
 
 pub use bee::BeeParams;
 pub use context::{Context, Neighbour, TargetNow};
@@ -69,6 +70,7 @@ registry! {$
     Curl => crate::model::curl::CurlModel,
     Brownian => crate::model::brownian::BrownianModel,
     Boids => crate::model::boids::BoidsModel,
+    Zonal => crate::model::zonal::ZonalModel,
 }
 
 impl ModelKind {
