@@ -1,6 +1,7 @@
 //! The same shot and seed give byte-identical caches whatever the number of threads, and
 //! a different seed gives a different swarm. The shot holds a crowd (400 bees in a 5 cm
-//! cube) so that the bounded-neighbour search's ring walk is covered too.
+//! cube) so that the bounded-neighbour search's ring walk is covered too, and a dense
+//! zonal swarm (paper 002: ORCA, escape angles drawn per agent) meeting a predator.
 
 use std::path::Path;
 use std::process::Command;
@@ -28,6 +29,16 @@ model = "brownian"
 name = "crowd"
 count = 400
 spawn = { shape = "box", center = [0.6, 1.5, 0], size = [0.05, 0.05, 0.05] }
+[[swarm]]
+name = "zonal"
+count = 300
+model = "zonal"
+preset = "escape"
+spawn = { shape = "box", center = [-0.6, 1.5, 0], size = [0.2, 0.2, 0.2] }
+[[target]]
+type = "predator"
+keys = [{ frame = 1, position = [-1.2, 1.5, 0] }, { frame = 25, position = [0, 1.5, 0] }]
+swarms = ["zonal"]
 [[obstacle]]
 type = "cylinder"
 center = [0.3, 1, 0.3]

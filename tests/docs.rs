@@ -29,7 +29,10 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
     let doc: serde_json::Value = serde_json::from_str(&beeswarm::cli::models::json()).unwrap();
     let models = doc["models"].as_array().unwrap();
     let model = |name: &str| models.iter().find(|m| m["name"] == name).unwrap();
-    assert_eq!(names(&doc, "models"), ["bee", "curl", "brownian", "boids"]);
+    assert_eq!(
+        names(&doc, "models"),
+        ["bee", "curl", "brownian", "boids", "zonal"]
+    );
     let bee = model("bee");
     let params = names(bee, "params");
     assert!(

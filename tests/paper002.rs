@@ -186,3 +186,86 @@ fn rvo_keeps_every_pair_apart_by_the_sum_of_their_radii_and_out_of_obstacles() {
     assert!(closest["no_orca"] < contact, "{closest:?}");
     assert!(closest["orca"] >= contact * 0.999, "{closest:?}");
 }
+
+/// Mean over the frames from `a` to `b` seconds of each frame's mean distance to `at`.
+fn mean_distance(f: &Frames, at: impl Fn(usize) -> Vec3, a: f64, b: f64) -> f64 {
+    let (ka, kb) = (
+        (a * f.fps()) as usize,
+        ((b * f.fps()) as usize).min(f.len() - 1),
+    );
+    let mut sum = 0.0;
+    for k in ka..=kb {
+        let e = at(k);
+        let p = &f.positions()[k];
+        sum += p.iter().map(|q| q.distance(e) as f64).sum::<f64>() / p.len() as f64;
+    }
+    sum / (kb - ka + 1) as f64
+}
+
+/// The fraction of agents within `radius` of `at` in frame `k`.
+fn near(f: &Frames, k: usize, at: Vec3, radius: f32) -> f64 {
+    let p = &f.positions()[k];
+    p.iter().filter(|q| q.distance(at) < radius).count() as f64 / p.len() as f64
+}
+
+#[test]
+fn fig7_moths_gather_at_the_lamp_without_entering_it() {
+    let swarms = bake("paper002_phototaxis.toml");
+    let f = &swarms["moths"];
+    let lamp = Vec3::new(0.0, 2.5, 0.0);
+    let early = mean_distance(f, |_| lamp, 0.0, 1.0);
+    let late = mean_distance(f, |_| lamp, 8.0, 10.0);
+    let within = near(f, f.len() - 1, lamp, 0.25);
+    let mut inside = 0;
+    for p in f.positions() {
+        for q in p {
+            let pole = Vec3::new(0.0, q.y.clamp(0.0, 2.4), 0.0);
+            inside += usize::from(q.distance(lamp) < 0.06 + 0.004 * 0.9 * 0.999);
+            inside += usize::from(q.y < 2.4 && q.distance(pole) < 0.03 + 0.004 * 0.9 * 0.999);
+        }
+    }
+    println!(
+        "phototaxis: mean distance to the lamp {early:.3} m in the first second, {late:.3} m in the last 2 s; {:.0} % within r_res at the end; {inside} inside the lamp or pole",
+        within * 100.0
+    );
+    assert!(late < 0.8 * early, "{early} → {late}");
+    assert_eq!(inside, 0);
+}
+
+#[test]
+fn fig5_males_that_see_the_female_chase_her() {
+    let shot = beeswarm::shot::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper002_mating.toml"),
+    )
+    .unwrap();
+    let female = &shot.targets[0];
+    let at = |k: usize| female.position_at(shot.frame_start as f64 + k as f64);
+    let swarms = bake("paper002_mating.toml");
+    let f = &swarms["males"];
+    let r_res = 2.0 * 0.05;
+    let (mut seen, mut towards) = (0usize, 0usize);
+    let mut chasers = vec![false; f.agents()];
+    for (k, (pos, vel)) in f.positions().iter().zip(f.velocities()).enumerate() {
+        let e = at(k);
+        for (m, (p, v)) in pos.iter().zip(vel).enumerate() {
+            let d = e - *p;
+            if d.length() > r_res || v.length() < 1e-6 {
+                continue;
+            }
+            seen += 1;
+            chasers[m] = true;
+            towards += usize::from(v.dot(d) > 0.0);
+        }
+    }
+    let frac = towards as f64 / seen as f64;
+    let n_chasers = chasers.iter().filter(|&&c| c).count();
+    let last = near(f, f.len() - 1, at(f.len() - 1), 0.15);
+    println!(
+        "mating: {n_chasers} of {} males saw the female; {:.1} % of {seen} (frame, male) samples in sight fly towards her; {:.0} % within 0.15 m of her at 10 s",
+        f.agents(),
+        100.0 * frac,
+        100.0 * last
+    );
+    assert!(n_chasers >= 5, "{n_chasers} males saw her");
+    assert!(frac > 0.8, "{frac}");
+}

@@ -27,7 +27,7 @@ use crate::math::{self, Rng, finite_or_zero};
 use crate::species::{Channel, HONEYBEE};
 use glam::Vec3;
 use noise::{Noise, NoiseKind};
-use orca::{Plane, Planes};
+use orca::{Mover, Planes, Times};
 pub use params::ZonalParams;
 use response::Stimulus;
 use zones::{Weights, ZoneSums, Zones};
@@ -172,17 +172,15 @@ impl Model for ZonalModel {
 
         // Obstacles first: the planes that must hold whatever the neighbours ask.
         let mut planes = Planes::default();
+        let times = Times {
+            horizon: self.time_horizon,
+            dt,
+        };
         if self.orca {
             let look = ri + self.max_speed * self.time_horizon;
             for q in cx.obstacle_queries(p) {
                 if q.distance < look {
-                    planes.push(orca::obstacle_plane(
-                        q.normal,
-                        q.distance,
-                        ri,
-                        self.time_horizon,
-                        dt,
-                    ));
+                    planes.push(orca::obstacle_plane(q.normal, q.distance, ri, times));
                 }
             }
         }
@@ -197,18 +195,17 @@ impl Model for ZonalModel {
                 let dist = d2.sqrt();
                 sums.add(&self.zones, pj - p, dist, o.vel - v);
                 if self.orca {
-                    let plane: Plane = orca::agent_plane(
-                        p,
-                        v,
-                        pj,
-                        o.vel,
+                    planes.push(orca::agent_plane(
+                        Mover { pos: p, vel: v },
+                        Mover {
+                            pos: pj,
+                            vel: o.vel,
+                        },
                         ri + o.radius,
-                        self.time_horizon,
-                        dt,
+                        times,
                         0.5,
                         flight::separation_fallback(i, j),
-                    );
-                    planes.push(plane);
+                    ));
                 }
             },
         );

@@ -5,10 +5,11 @@
 //!
 //! Each neighbour (and each obstacle) gives a half-space of permitted velocities bounded by
 //! a plane; the new velocity is the point of the intersection of those half-spaces and the
-//! ball of radius `max_speed` nearest the preferred velocity: an incremental randomised-
-//! order-free linear program in 3D (1D on a line, 2D on a plane, 3D in the ball), and when
-//! the constraints leave nothing, the velocity that violates the worst of them least
-//! (the 4D fallback of the paper's RVO2-3D library). Velocities in m/s, world frame.
+//! ball of radius `max_speed` nearest the preferred velocity: an incremental linear program
+//! (1D on a line, 2D on a plane, 3D in the ball, planes taken in a fixed order so the
+//! result is reproducible), and when the constraints leave nothing, the velocity that
+//! violates the worst of them least (the fallback of the authors' RVO2-3D library).
+//! Velocities in m/s, world frame.
 //!
 //! Written here rather than taken from the `dodgy_3d` crate: that crate draws a random
 //! direction from the thread's generator for coincident agents (not reproducible), builds
@@ -70,24 +71,35 @@ impl Planes {
     }
 }
 
-/// The ORCA plane agent A (position `pa`, velocity `va`) gets from neighbour B: bodies of
-/// radii summing to `contact`, B at `pb` with velocity `vb`. `dt` is the step, used when the
-/// bodies already overlap (then the plane pushes them apart within one step). A takes
-/// half the avoidance (`share` = 0.5) against another agent, all of it (1) against a
-/// static body. `fallback` is a deterministic direction for coincident agents.
+/// A moving body: position (m) and velocity (m/s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mover {
+    pub pos: Vec3,
+    pub vel: Vec3,
+}
+
+/// ORCA's two times, seconds: the horizon within which no collision is allowed, and the
+/// step, within which bodies that already overlap are pushed apart.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Times {
+    pub horizon: f32,
+    pub dt: f32,
+}
+
+/// The ORCA plane agent `a` gets from neighbour `b`, bodies of radii summing to `contact`.
+/// `a` takes half the avoidance (`share` = 0.5) against another agent, all of it (1)
+/// against a static body. `fallback` is a deterministic direction for coincident agents.
 pub fn agent_plane(
-    pa: Vec3,
-    va: Vec3,
-    pb: Vec3,
-    vb: Vec3,
+    a: Mover,
+    b: Mover,
     contact: f32,
-    time_horizon: f32,
-    dt: f32,
+    times: Times,
     share: f32,
     fallback: Vec3,
 ) -> Plane {
-    let rel_pos = pb - pa;
-    let rel_vel = va - vb;
+    let (va, time_horizon, dt) = (a.vel, times.horizon, times.dt);
+    let rel_pos = b.pos - a.pos;
+    let rel_vel = a.vel - b.vel;
     let dist2 = rel_pos.length_squared();
     let r2 = contact * contact;
     let (normal, u);
@@ -137,18 +149,12 @@ pub fn agent_plane(
 /// seconds; a body already closer than `radius` must leave within one step `dt`. For the
 /// convex shapes of a shot the tangent half-space holds the whole obstacle, so this is
 /// conservative.
-pub fn obstacle_plane(
-    outward: Vec3,
-    distance: f32,
-    radius: f32,
-    time_horizon: f32,
-    dt: f32,
-) -> Plane {
+pub fn obstacle_plane(outward: Vec3, distance: f32, radius: f32, times: Times) -> Plane {
     let gap = distance - radius;
     let min_normal_speed = if gap >= 0.0 {
-        -gap / time_horizon
+        -gap / times.horizon
     } else {
-        -gap / dt
+        -gap / times.dt
     };
     Plane {
         point: outward * min_normal_speed,
@@ -161,7 +167,11 @@ pub fn obstacle_plane(
 /// plane was satisfied).
 pub fn solve(planes: &[Plane], max_speed: f32, preferred: Vec3) -> (Vec3, bool) {
     let mut result = Vec3::ZERO;
-    let failed = program3(planes, max_speed, preferred, false, &mut result);
+    let goal = Goal {
+        opt: preferred,
+        direction: false,
+    };
+    let failed = program3(planes, max_speed, goal, &mut result);
     if failed < planes.len() {
         program4(planes, failed, max_speed, &mut result);
         (result, false)
@@ -176,18 +186,25 @@ fn violation(p: &Plane, v: Vec3) -> f32 {
     p.normal.dot(p.point - v)
 }
 
-/// On the line `point + t·dir` within the ball, the point nearest `opt` (or furthest along
-/// `opt` when `direction`) that satisfies planes[..n].
+/// What a program optimises: the point nearest `opt`, or with `direction` the point
+/// furthest along the unit vector `opt`.
+#[derive(Clone, Copy, Debug)]
+struct Goal {
+    opt: Vec3,
+    direction: bool,
+}
+
+/// On the line `point + t·dir` within the ball, the goal's optimum that satisfies
+/// planes[..n].
 fn program1(
     planes: &[Plane],
     n: usize,
-    point: Vec3,
-    dir: Vec3,
+    (point, dir): (Vec3, Vec3),
     radius: f32,
-    opt: Vec3,
-    direction: bool,
+    goal: Goal,
     result: &mut Vec3,
 ) -> bool {
+    let Goal { opt, direction } = goal;
     let dot = point.dot(dir);
     let disc = dot * dot + radius * radius - point.length_squared();
     if disc < 0.0 {
@@ -227,14 +244,8 @@ fn program1(
 }
 
 /// On plane n within the ball, the optimum satisfying planes[..n].
-fn program2(
-    planes: &[Plane],
-    n: usize,
-    radius: f32,
-    opt: Vec3,
-    direction: bool,
-    result: &mut Vec3,
-) -> bool {
+fn program2(planes: &[Plane], n: usize, radius: f32, goal: Goal, result: &mut Vec3) -> bool {
+    let Goal { opt, direction } = goal;
     let pn = planes[n];
     let plane_dist = pn.point.dot(pn.normal);
     let plane_dist2 = plane_dist * plane_dist;
@@ -272,7 +283,7 @@ fn program2(
             let line_normal = dir.cross(pn.normal);
             let point = pn.point
                 + line_normal * ((pi.point - pn.point).dot(pi.normal) / line_normal.dot(pi.normal));
-            if !program1(planes, i, point, dir, radius, opt, direction, result) {
+            if !program1(planes, i, (point, dir), radius, goal, result) {
                 return false;
             }
         }
@@ -283,7 +294,8 @@ fn program2(
 /// In the ball, the optimum satisfying every plane; returns the index of the first plane
 /// it could not satisfy (`planes.len()` on success), `result` then holding the optimum of
 /// the planes before it.
-fn program3(planes: &[Plane], radius: f32, opt: Vec3, direction: bool, result: &mut Vec3) -> usize {
+fn program3(planes: &[Plane], radius: f32, goal: Goal, result: &mut Vec3) -> usize {
+    let Goal { opt, direction } = goal;
     *result = if direction {
         opt * radius
     } else if opt.length_squared() > radius * radius {
@@ -294,7 +306,7 @@ fn program3(planes: &[Plane], radius: f32, opt: Vec3, direction: bool, result: &
     for i in 0..planes.len() {
         if violation(&planes[i], *result) > 0.0 {
             let keep = *result;
-            if !program2(planes, i, radius, opt, direction, result) {
+            if !program2(planes, i, radius, goal, result) {
                 *result = keep;
                 return i;
             }
@@ -333,7 +345,11 @@ fn program4(planes: &[Plane], begin: usize, radius: f32, result: &mut Vec3) {
                 }
             }
             let keep = *result;
-            if program3(&projected[..m], radius, pi.normal, true, result) < m {
+            let goal = Goal {
+                opt: pi.normal,
+                direction: true,
+            };
+            if program3(&projected[..m], radius, goal, result) < m {
                 // Only rounding can make this fail; keep the previous answer.
                 *result = keep;
             }
@@ -357,7 +373,20 @@ mod tests {
             let mut next = v;
             for a in 0..2 {
                 let b = 1 - a;
-                let plane = agent_plane(p[a], v[a], p[b], v[b], 2.0 * r, tau, dt, 0.5, Vec3::Y);
+                let plane = agent_plane(
+                    Mover {
+                        pos: p[a],
+                        vel: v[a],
+                    },
+                    Mover {
+                        pos: p[b],
+                        vel: v[b],
+                    },
+                    2.0 * r,
+                    Times { horizon: tau, dt },
+                    0.5,
+                    Vec3::Y,
+                );
                 next[a] = solve(&[plane], 2.0, pref[a]).0;
             }
             v = next;
@@ -380,13 +409,19 @@ mod tests {
     #[test]
     fn an_unconstrained_agent_keeps_its_preferred_velocity() {
         let far = agent_plane(
-            Vec3::ZERO,
-            Vec3::X,
-            Vec3::new(0.0, 5.0, 0.0),
-            Vec3::ZERO,
+            Mover {
+                pos: Vec3::ZERO,
+                vel: Vec3::X,
+            },
+            Mover {
+                pos: Vec3::new(0.0, 5.0, 0.0),
+                vel: Vec3::ZERO,
+            },
             0.2,
-            1.0,
-            0.02,
+            Times {
+                horizon: 1.0,
+                dt: 0.02,
+            },
             0.5,
             Vec3::Y,
         );
@@ -427,11 +462,15 @@ mod tests {
 
     #[test]
     fn an_obstacle_plane_lets_an_agent_touch_the_wall_no_sooner_than_the_horizon() {
-        let wall = obstacle_plane(Vec3::Y, 1.1, 0.1, 2.0, 0.02);
+        let times = Times {
+            horizon: 2.0,
+            dt: 0.02,
+        };
+        let wall = obstacle_plane(Vec3::Y, 1.1, 0.1, times);
         let (v, _) = solve(&[wall], 5.0, -Vec3::Y * 3.0);
         assert!((v.y + 0.5).abs() < 1e-5, "{v}");
         // Inside by 5 cm: leaves within one step.
-        let inside = obstacle_plane(Vec3::Y, 0.05, 0.1, 2.0, 0.02);
+        let inside = obstacle_plane(Vec3::Y, 0.05, 0.1, times);
         let (v, _) = solve(&[inside], 5.0, Vec3::ZERO);
         assert!((v.y - 2.5).abs() < 1e-4, "{v}");
     }

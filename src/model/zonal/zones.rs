@@ -79,9 +79,9 @@ impl ZoneSums {
     pub fn force(&self, w: &Weights) -> Vec3 {
         let chi = [w.rep, w.ali, w.att];
         let mut f = Vec3::ZERO;
-        for k in 0..3 {
-            if self.count[k] > 0 {
-                f += self.sum[k] * (chi[k] / self.count[k] as f32);
+        for ((sum, &n), chi) in self.sum.iter().zip(&self.count).zip(chi) {
+            if n > 0 {
+                f += *sum * (chi / n as f32);
             }
         }
         f
