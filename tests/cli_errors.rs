@@ -764,7 +764,7 @@ fn bad_bench_options_name_the_option() {
         ),
         (
             &["--model", "wasp"][..],
-            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", found \"wasp\"",
+            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"zonal\", found \"wasp\"",
         ),
         (
             &["--model", "boids", "--preset", "nest"][..],
