@@ -1,8 +1,9 @@
 //! The same shot and seed give byte-identical caches (and preview PNG) whatever the number
 //! of threads, and a different seed gives a different swarm. The shot holds a crowd (400
-//! bees in a 5 cm cube) so that the bounded-neighbour search's ring walk is covered too, and
-//! a swarm of paper 001's field model (its path field, noise and minimum distance
-//! enforcement).
+//! bees in a 5 cm cube) so that the bounded-neighbour search's ring walk is covered too, a
+//! swarm of paper 001's field model (its path field, noise and minimum distance
+//! enforcement) and a dense zonal swarm (paper 002: ORCA, escape angles drawn per agent)
+//! meeting a predator.
 
 use std::path::Path;
 use std::process::Command;
@@ -41,6 +42,16 @@ count = 200
 model = "field"
 spawn = { shape = "box", center = [-0.5, 1, 0], size = [0.4, 0.4, 0.4] }
 params = { d_min = 0.05, goal_radius = 0.2 }
+[[swarm]]
+name = "zonal"
+count = 300
+model = "zonal"
+preset = "escape"
+spawn = { shape = "box", center = [-0.6, 1.5, 0], size = [0.2, 0.2, 0.2] }
+[[target]]
+type = "predator"
+keys = [{ frame = 1, position = [-1.2, 1.5, 0] }, { frame = 25, position = [0, 1.5, 0] }]
+swarms = ["zonal"]
 [[obstacle]]
 type = "cylinder"
 center = [0.3, 1, 0.3]

@@ -31,7 +31,15 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
     let model = |name: &str| models.iter().find(|m| m["name"] == name).unwrap();
     assert_eq!(
         names(&doc, "models"),
-        ["bee", "curl", "brownian", "boids", "field", "fastswarm"]
+        [
+            "bee",
+            "curl",
+            "brownian",
+            "boids",
+            "field",
+            "fastswarm",
+            "zonal"
+        ]
     );
     assert_eq!(names(model("field"), "channels"), ["speed", "cost", "mde"]);
     assert_eq!(

@@ -52,7 +52,7 @@ impl ParamRange {
 /// Ranges bracket paper 000's Table I (κ1 1–1.5, κ2 2.3–5, κ3 0.9–1.7, L 2.2–2.7 and h 3
 /// scene units = 0.11–0.135 m and 0.15 m, ε 1.7–2) by a wide margin either way, and the
 /// speed spans hovering to fast cruising of small insects.
-pub const PARAMS: [ParamRange; 14] = [
+pub const PARAMS: [ParamRange; 21] = [
     ParamRange {
         key: "kappa1",
         lo: 0.1,
@@ -145,6 +145,51 @@ pub const PARAMS: [ParamRange; 14] = [
         key: "attraction",
         lo: 0.1,
         hi: 3.0,
+        log: true,
+    },
+    // The zonal model (paper 002): the seven parameters the paper estimates from its
+    // recordings (γ, scale, gain, χ_rep, r_rep, χ_att, r_att), around its Table 1 values
+    // in SI (docs/model.md, "Paper 002: units") by a wide margin either way.
+    ParamRange {
+        key: "gamma",
+        lo: 1.0,
+        hi: 1000.0,
+        log: true,
+    },
+    ParamRange {
+        key: "scale",
+        lo: 0.005,
+        hi: 1.0,
+        log: true,
+    },
+    ParamRange {
+        key: "gain",
+        lo: 1e-4,
+        hi: 1.0,
+        log: true,
+    },
+    ParamRange {
+        key: "chi_rep",
+        lo: 0.01,
+        hi: 10.0,
+        log: true,
+    },
+    ParamRange {
+        key: "r_rep",
+        lo: 0.002,
+        hi: 0.2,
+        log: true,
+    },
+    ParamRange {
+        key: "chi_att",
+        lo: 0.01,
+        hi: 10.0,
+        log: true,
+    },
+    ParamRange {
+        key: "r_att_star",
+        lo: 0.01,
+        hi: 1.0,
         log: true,
     },
 ];

@@ -255,6 +255,7 @@ pub fn pull(
             TargetKind::Surface => {
                 targets::surface_attraction(pos, t.center, t.normal, strength, t.reach)
             }
+            TargetKind::Predator => -targets::attraction(pos, t.center, strength, t.reach),
             _ => targets::attraction(pos, t.center, strength, t.reach),
         };
     }

@@ -23,6 +23,7 @@ pub mod flight;
 pub mod params;
 pub mod targets;
 pub mod vision;
+pub mod zonal;
 
 pub use bee::BeeParams;
 pub use context::{Context, Neighbour, TargetNow};
@@ -73,6 +74,7 @@ registry! {$
     Boids => crate::model::boids::BoidsModel,
     Field => crate::model::field::FieldModel,
     Fastswarm => crate::model::fastswarm::FastswarmModel,
+    Zonal => crate::model::zonal::ZonalModel,
 }
 
 impl ModelKind {

@@ -17,6 +17,14 @@ pub enum TargetKind {
     Attractor,
     /// A landing surface: pulls towards a plane rather than a point, with no body.
     Surface,
+    /// A predator-like object (paper 002): the zonal model's insects flee it; the other
+    /// models are pushed away from it as strongly as an attractor would pull.
+    Predator,
+    /// Food or a female to chase (paper 002's pursuit stimulus); pulls like an attractor in
+    /// the other models.
+    Food,
+    /// A light (paper 002's phototaxis): a pursuit stimulus like food.
+    Light,
 }
 
 impl TargetKind {

@@ -43,6 +43,8 @@ pub const NEST: (f64, f64) = (0.08, 3.0);
 pub const FLOWER: (f64, f64) = (0.03, 2.0);
 pub const ATTRACTOR: (f64, f64) = (0.05, 2.0);
 pub const SURFACE: (f64, f64) = (0.05, 1.0);
+/// Paper 002's stimuli: their strength multiplies the zonal model's χ_res.
+pub const STIMULUS: (f64, f64) = (0.05, 1.0);
 
 pub const OUTPUT_DIR: &str = "out";
 pub const OUTPUT_FORMATS: [&str; 2] = ["glb", "usda"];

@@ -1004,11 +1004,22 @@ fn resolve_target(
     let (kind, (radius, strength)) = match cx.one_of(
         &k("type"),
         &kind_name,
-        &["nest", "flower", "attractor", "surface"],
+        &[
+            "nest",
+            "flower",
+            "attractor",
+            "surface",
+            "predator",
+            "food",
+            "light",
+        ],
     )? {
         "nest" => (TargetKind::Nest, d::NEST),
         "flower" => (TargetKind::Flower, d::FLOWER),
         "surface" => (TargetKind::Surface, d::SURFACE),
+        "predator" => (TargetKind::Predator, d::STIMULUS),
+        "food" => (TargetKind::Food, d::STIMULUS),
+        "light" => (TargetKind::Light, d::STIMULUS),
         _ => (TargetKind::Attractor, d::ATTRACTOR),
     };
     let normal = match (kind, rt.normal) {
