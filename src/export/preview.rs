@@ -270,6 +270,15 @@ impl PreviewWriter {
                         c.line(p.0, p.1, q.0, q.1, col, 2);
                     }
                 }
+                Shape::Mesh { mesh } => {
+                    // A wireframe; of a large mesh every k-th triangle, enough to show
+                    // its shape at preview size.
+                    let stride = mesh.triangle_count().div_ceil(20_000).max(1);
+                    for t in mesh.triangles().step_by(stride) {
+                        let p: Vec<(f64, f64)> = [t[0], t[1], t[2], t[0]].map(to).to_vec();
+                        c.polyline(&p, col, 1);
+                    }
+                }
             }
         }
     }
