@@ -317,7 +317,7 @@ fn brute_signed_distance(tris: &[[Vec3; 3]], mode: MeshMode, p: Vec3) -> f32 {
         MeshMode::Shell { thickness } => d - 0.5 * thickness,
         MeshMode::Solid => {
             let dirs = [
-                Vec3::new(0.5377, 0.7071, 0.4592),
+                Vec3::new(0.5377, 0.7093, 0.4559),
                 Vec3::new(-0.6131, 0.2207, 0.7586),
                 Vec3::new(0.3119, -0.8834, 0.3497),
             ];

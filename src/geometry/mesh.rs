@@ -98,6 +98,7 @@ pub struct Mesh {
     triangles: usize,
     min: Vec3,
     max: Vec3,
+    far: FarField,
 }
 
 struct Part {
@@ -205,13 +206,23 @@ impl Mesh {
             return Err(MeshError::Empty);
         }
         let (min, max) = bounds(parts.iter().flat_map(|p| [p.min, p.max]));
-        Ok(Mesh {
+        let mut mesh = Mesh {
             mode,
             triangles: parts.iter().map(|p| p.mesh.num_triangles()).sum(),
             parts,
             min,
             max,
-        })
+            far: FarField {
+                origin: Vec3::ZERO,
+                cell: 1.0,
+                dims: [0; 3],
+                side: Vec::new(),
+                reach: f32::MAX,
+                band: f32::MAX,
+            },
+        };
+        mesh.far = FarField::build(&mesh);
+        Ok(mesh)
     }
 
     pub fn mode(&self) -> MeshMode {
@@ -235,7 +246,11 @@ impl Mesh {
 
     /// Approximate memory held by the query structures, bytes.
     pub fn memory_bytes(&self) -> usize {
-        self.parts.iter().map(|p| p.mesh.total_memory_size()).sum()
+        self.parts
+            .iter()
+            .map(|p| p.mesh.total_memory_size())
+            .sum::<usize>()
+            + self.far.side.len()
     }
 
     /// Every triangle's corners, world space (for drawing).
@@ -245,7 +260,9 @@ impl Mesh {
             .flat_map(|p| p.mesh.triangles().map(|t| [gv(t.a), gv(t.b), gv(t.c)]))
     }
 
-    /// Signed distance, closest point and outward normal at `p` (see the module docs).
+    /// Signed distance, closest point and outward normal at `p` (see the module docs):
+    /// exact within [`Mesh::exact_band`] of the surface and inside a solid; farther out, a
+    /// lower bound of the distance (see [`Mesh::far`]).
     pub fn query(&self, p: Vec3) -> super::SurfaceQuery {
         if !p.is_finite() {
             // No NaN out, whatever comes in: "far away".
@@ -255,16 +272,54 @@ impl Mesh {
                 normal: Vec3::Y,
             };
         }
+        match self.far.classify(p) {
+            Reach::FarOutside => self.far_outside(p),
+            // Within `reach` + cell·√3 (see FarField): the bounded search finds it.
+            Reach::Near => self
+                .exact(p, self.far.reach + 2.0 * self.far.cell)
+                .or_else(|| self.exact(p, f32::MAX))
+                .unwrap_or_else(|| self.far_outside(p)),
+            Reach::FarInside => self
+                .exact(p, f32::MAX)
+                .unwrap_or_else(|| self.far_outside(p)),
+        }
+    }
+
+    /// Distance within which [`Mesh::query`] is exact, m.
+    pub fn exact_band(&self) -> f32 {
+        self.far.band
+    }
+
+    /// The answer far outside: at least the exact band away, and at least as far as the
+    /// bounding box; the normal points away from the box (from its centre inside it), the
+    /// point lies that far back along it. A lower bound, so a sphere-traced sweep never
+    /// steps over the surface.
+    fn far_outside(&self, p: Vec3) -> super::SurfaceQuery {
+        let on_box = p.clamp(self.min, self.max);
+        let n = super::dir_or(
+            p - on_box,
+            super::dir_or(p - 0.5 * (self.min + self.max), Vec3::Y),
+        );
+        let distance = (p - on_box).length().max(self.far.band);
+        super::SurfaceQuery {
+            distance,
+            point: p - n * distance,
+            normal: n,
+        }
+    }
+
+    /// The exact answer if the surface is within `max_dist` of `p`.
+    fn exact(&self, p: Vec3, max_dist: f32) -> Option<super::SurfaceQuery> {
         match self.mode {
             MeshMode::Shell { thickness } => {
-                let (c, face) = project(&self.parts[0].mesh, p).0;
+                let (c, face, _) = project(&self.parts[0].mesh, p, max_dist)?;
                 let half = 0.5 * thickness;
                 let n = super::dir_or(p - c, face);
-                super::SurfaceQuery {
+                Some(super::SurfaceQuery {
                     distance: (p - c).length() - half,
                     point: c + n * half,
                     normal: n,
-                }
+                })
             }
             MeshMode::Solid => {
                 // The union of the pieces: inside if inside any (then the deepest counts),
@@ -274,10 +329,21 @@ impl Mesh {
                 let mut inside: Option<(f32, Vec3, Vec3)> = None;
                 for part in &self.parts {
                     let lb = box_distance(p, part.min, part.max);
-                    if lb > 0.0 && outside.is_some_and(|(d, ..)| lb >= d) {
+                    if lb > max_dist || (lb > 0.0 && outside.is_some_and(|(d, ..)| lb >= d)) {
                         continue;
                     }
-                    let ((c, face), is_inside) = project(&part.mesh, p);
+                    // Inside a piece's box with its surface out of reach: it may still hold
+                    // `p` deep inside, under another piece's surface; ask without bound.
+                    let unbounded = lb == 0.0 && self.parts.len() > 1;
+                    let Some((c, face, is_inside)) =
+                        project(&part.mesh, p, max_dist).or_else(|| {
+                            unbounded
+                                .then(|| project(&part.mesh, p, f32::MAX))
+                                .flatten()
+                        })
+                    else {
+                        continue;
+                    };
                     let d = (p - c).length();
                     if is_inside {
                         if inside.is_none_or(|(depth, ..)| d > depth) {
@@ -288,39 +354,197 @@ impl Mesh {
                     }
                 }
                 match (inside, outside) {
-                    (Some((depth, c, face)), _) => super::SurfaceQuery {
+                    (Some((depth, c, face)), _) => Some(super::SurfaceQuery {
                         distance: -depth,
                         point: c,
                         normal: super::dir_or(c - p, face),
-                    },
-                    (None, Some((d, c, face))) => super::SurfaceQuery {
+                    }),
+                    (None, Some((d, c, face))) => Some(super::SurfaceQuery {
                         distance: d,
                         point: c,
                         normal: super::dir_or(p - c, face),
-                    },
-                    // Unreachable: `new` refuses a mesh without pieces.
-                    (None, None) => super::SurfaceQuery {
-                        distance: f32::MAX,
-                        point: self.min,
-                        normal: Vec3::Y,
-                    },
+                    }),
+                    (None, None) => None,
                 }
             }
         }
     }
 }
 
-/// The closest point of `mesh` to `p` and the unit normal of its triangle, and whether `p`
-/// is inside (by the pseudo-normals; meaningful for a closed, oriented mesh only).
-fn project(mesh: &TriMesh, p: Vec3) -> ((Vec3, Vec3), bool) {
-    let (proj, (tri, _)) = mesh.project_local_point_and_get_location(pv(p), false);
+/// Where a point stands, by the far-field grid.
+enum Reach {
+    /// Possibly within `reach` of the surface: ask the hierarchy.
+    Near,
+    FarOutside,
+    FarInside,
+}
+
+/// A coarse grid over the mesh's box (grown by `reach`) that tells, in a few nanoseconds,
+/// which points are far from the surface, and on which side: most bees most of the time.
+/// Node values are exact signed distances within `reach` (4 cells) of the surface; the
+/// other nodes only keep their side, found by flooding from the near ones (no edge between
+/// two far nodes can cross the surface, they are 4 cells from it and an edge is 1 long).
+/// A point whose 8 cell corners are all far is at least `band` = reach − cell·√3 from
+/// the surface; any other point is within `reach` + cell·√3 of it.
+struct FarField {
+    origin: Vec3,
+    cell: f32,
+    dims: [usize; 3],
+    /// +1 far outside, −1 far inside, 0 near.
+    side: Vec<i8>,
+    reach: f32,
+    band: f32,
+}
+
+impl FarField {
+    fn build(mesh: &Mesh) -> FarField {
+        let size = mesh.max - mesh.min;
+        // About 56 cells across the largest side, at least 5 cm, so the grid stays under
+        // 64³ nodes (256 KB) and the exact band is at least ~11 cm wide.
+        let cell = (size.max_element() / 56.0).max(0.05);
+        let reach = 4.0 * cell;
+        let origin = mesh.min - Vec3::splat(reach + cell);
+        let dims = ((size + Vec3::splat(2.0 * (reach + cell))) / cell)
+            .ceil()
+            .as_uvec3()
+            .to_array()
+            .map(|n| n as usize + 1);
+        let node = |i: usize| {
+            let (x, y, z) = (
+                i % dims[0],
+                (i / dims[0]) % dims[1],
+                i / (dims[0] * dims[1]),
+            );
+            origin + cell * Vec3::new(x as f32, y as f32, z as f32)
+        };
+        let count = dims[0] * dims[1] * dims[2];
+        // Near nodes from the hierarchy (in parallel; each node on its own, so the result
+        // does not depend on the thread count): 0, and far nodes 2 (side unknown yet).
+        use rayon::prelude::*;
+        let (mut side, near_side): (Vec<i8>, Vec<i8>) = (0..count)
+            .into_par_iter()
+            .map(|i| match mesh.exact(node(i), reach) {
+                Some(q) if q.distance < 0.0 => (0, -1),
+                Some(_) => (0, 1),
+                None => (2, 0),
+            })
+            .unzip();
+        // Flood each far region from the side of a near node next to it; the grid's rim
+        // is outside.
+        let at = |x: usize, y: usize, z: usize| x + dims[0] * (y + dims[1] * z);
+        for start in 0..count {
+            if side[start] != 2 {
+                continue;
+            }
+            let mut region = vec![start];
+            let mut found = 0i8;
+            side[start] = 3;
+            let mut k = 0;
+            while k < region.len() {
+                let i = region[k];
+                k += 1;
+                let (x, y, z) = (
+                    i % dims[0],
+                    (i / dims[0]) % dims[1],
+                    i / (dims[0] * dims[1]),
+                );
+                let on_rim = [x, y, z]
+                    .iter()
+                    .zip(dims)
+                    .any(|(c, d)| *c == 0 || *c == d - 1);
+                if on_rim && found == 0 {
+                    found = 1;
+                }
+                let mut next = Vec::with_capacity(6);
+                if x > 0 {
+                    next.push(at(x - 1, y, z));
+                }
+                if x + 1 < dims[0] {
+                    next.push(at(x + 1, y, z));
+                }
+                if y > 0 {
+                    next.push(at(x, y - 1, z));
+                }
+                if y + 1 < dims[1] {
+                    next.push(at(x, y + 1, z));
+                }
+                if z > 0 {
+                    next.push(at(x, y, z - 1));
+                }
+                if z + 1 < dims[2] {
+                    next.push(at(x, y, z + 1));
+                }
+                for j in next {
+                    match side[j] {
+                        2 => {
+                            side[j] = 3;
+                            region.push(j);
+                        }
+                        0 if found == 0 => found = near_side[j],
+                        _ => {}
+                    }
+                }
+            }
+            let s = if found == 0 { 1 } else { found };
+            for i in region {
+                side[i] = s;
+            }
+        }
+        FarField {
+            origin,
+            cell,
+            dims,
+            side,
+            reach,
+            band: reach - cell * 3f32.sqrt(),
+        }
+    }
+
+    fn classify(&self, p: Vec3) -> Reach {
+        let g = (p - self.origin) / self.cell;
+        let top = Vec3::new(
+            (self.dims[0] - 1) as f32,
+            (self.dims[1] - 1) as f32,
+            (self.dims[2] - 1) as f32,
+        );
+        if g.min_element() < 0.0 || g.cmpge(top).any() {
+            // Beyond the grid: more than `reach` from the mesh's box.
+            return Reach::FarOutside;
+        }
+        let b = g.floor().as_uvec3();
+        let (x, y, z) = (b.x as usize, b.y as usize, b.z as usize);
+        let mut all = 0i32;
+        for k in 0..8 {
+            let i = (x + (k & 1))
+                + self.dims[0] * ((y + ((k >> 1) & 1)) + self.dims[1] * (z + (k >> 2)));
+            let s = self.side[i];
+            if s == 0 {
+                return Reach::Near;
+            }
+            all += s as i32;
+        }
+        // Corners on both sides cannot happen (see the type's docs); be exact if they do.
+        match all {
+            8 => Reach::FarOutside,
+            -8 => Reach::FarInside,
+            _ => Reach::Near,
+        }
+    }
+}
+
+/// The closest point of `mesh` to `p` within `max_dist`, the unit normal of its triangle,
+/// and whether `p` is inside (by the pseudo-normals; meaningful for a closed, oriented
+/// mesh only).
+fn project(mesh: &TriMesh, p: Vec3, max_dist: f32) -> Option<(Vec3, Vec3, bool)> {
+    let (proj, (tri, _)) =
+        mesh.project_local_point_and_get_location_with_max_dist(pv(p), false, max_dist)?;
     let face = mesh
         .triangle(tri)
         .normal()
         .map(gv)
         .filter(|n| n.is_finite())
         .unwrap_or(Vec3::Y);
-    ((gv(proj.point), face), proj.is_inside)
+    Some((gv(proj.point), face, proj.is_inside))
 }
 
 /// A query structure over `tris` (indices into `verts`), with only the vertices it uses.
@@ -506,6 +730,45 @@ mod tests {
         pts
     }
 
+    /// Far from the surface (outside, beyond the exact band) a query is a lower bound of
+    /// at least the band, pointing away: checks that and says so.
+    fn far_checked(m: &Mesh, q: &SurfaceQuery, exact: &SurfaceQuery, tol: f32) -> bool {
+        if exact.distance < m.exact_band() + tol {
+            return false;
+        }
+        assert!(
+            q.distance >= m.exact_band() && q.distance <= exact.distance + tol,
+            "{q:?} {exact:?}"
+        );
+        assert!(q.normal.is_finite() && (q.normal.length() - 1.0).abs() < 1e-4);
+        true
+    }
+
+    #[test]
+    fn far_and_deep_points_get_bounds_and_exact_depths() {
+        let (v, t) = uv_sphere(Vec3::ZERO, 1.0, 24, 48);
+        let m = Mesh::new(&v, &t, MeshMode::Solid).unwrap();
+        assert!(m.exact_band() > 0.1, "{}", m.exact_band());
+        // Deep inside: exact (the hierarchy, unbounded).
+        let q = m.query(Vec3::new(0.0, 0.1, 0.0));
+        assert!((q.distance + 0.9).abs() < 0.01, "{q:?}");
+        assert!(q.normal.y > 0.99);
+        // Far outside, beyond the grid and within it: lower bounds, pointing away.
+        for p in [
+            Vec3::new(30.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.5, 0.0),
+            Vec3::new(0.9, 0.9, 0.9),
+        ] {
+            let q = m.query(p);
+            let exact = p.length() - 1.0;
+            assert!(
+                q.distance >= m.exact_band() && q.distance <= exact + 1e-4,
+                "{p}: {q:?}"
+            );
+            assert!(q.normal.dot(p) > 0.0);
+        }
+    }
+
     fn assert_close(mesh: &SurfaceQuery, exact: &SurfaceQuery, tol: f32, p: Vec3) {
         assert!(
             (mesh.distance - exact.distance).abs() < tol,
@@ -527,6 +790,9 @@ mod tests {
         for p in probe_points() {
             let exact = crate::geometry::query(&b, p);
             let q = m.query(p);
+            if far_checked(&m, &q, &exact, 1e-4) {
+                continue;
+            }
             assert_close(&q, &exact, 1e-4, p);
             // Face normals are exact away from edges and corners.
             if exact.distance < -1e-3 || (p - exact.point).abs().min_element() > 1e-3 {
@@ -553,6 +819,9 @@ mod tests {
         for p in probe_points() {
             let exact = crate::geometry::query(&s, p);
             let q = m.query(p);
+            if far_checked(&m, &q, &exact, tol) {
+                continue;
+            }
             assert!(
                 (q.distance - exact.distance).abs() < tol,
                 "at {p}: {q:?} {exact:?}"
@@ -571,6 +840,9 @@ mod tests {
             let m = Mesh::new(&v, &t, mode).unwrap();
             for p in probe_points() {
                 let q = m.query(p);
+                if q.distance >= m.exact_band() {
+                    continue;
+                }
                 assert!(
                     m.query(q.point).distance.abs() < 1e-4,
                     "{mode:?} at {p}: {q:?}"
@@ -596,8 +868,10 @@ mod tests {
         let q = m.query(Vec3::new(0.45, 0.0, 0.0));
         assert!((q.distance + 0.35).abs() < 1e-5, "{q:?}");
         assert!(m.query(Vec3::new(0.9, 0.0, 0.0)).distance < 0.0);
-        assert!((m.query(Vec3::new(1.3, 0.0, 0.0)).distance - 0.2).abs() < 1e-5);
-        assert!((m.query(Vec3::new(-0.7, 0.0, 0.0)).distance - 0.2).abs() < 1e-5);
+        assert!((m.query(Vec3::new(1.2, 0.0, 0.0)).distance - 0.1).abs() < 1e-5);
+        assert!((m.query(Vec3::new(-0.6, 0.0, 0.0)).distance - 0.1).abs() < 1e-5);
+        // Just outside the first box, deep in the second: inside.
+        assert!(m.query(Vec3::new(0.51, 0.0, 0.0)).distance < -0.3);
     }
 
     #[test]
@@ -613,12 +887,12 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let m = Mesh::new(&v, &t, MeshMode::Shell { thickness: 0.1 }).unwrap();
-        // Within the open box: 0.5 from the nearest wall minus half the thickness.
-        assert!((m.query(Vec3::new(0.0, 0.0, 0.0)).distance - 0.45).abs() < 1e-5);
-        // Outside the missing face: distance to the rim.
-        let q = m.query(Vec3::new(0.0, 0.0, 1.0));
+        // Within the open box: 0.1 from the nearest wall minus half the thickness.
+        assert!((m.query(Vec3::new(0.4, 0.0, 0.0)).distance - 0.05).abs() < 1e-5);
+        // Beyond the missing face: distance to the rim.
+        let q = m.query(Vec3::new(0.45, 0.0, 0.55));
         assert!(
-            (q.distance - (0.5f32.hypot(0.5) - 0.05)).abs() < 1e-5,
+            (q.distance - (0.05f32.hypot(0.05) - 0.05)).abs() < 1e-5,
             "{q:?}"
         );
     }
