@@ -47,22 +47,20 @@ pub fn read(path: &Path) -> Result<MeshData, FileError> {
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     if ext != "obj" && ext != "stl" {
-        return Err(FileError::whole(format!(
-            "expected a .obj or .stl mesh file, found \"{}\"",
-            path.display()
-        )));
+        return Err(FileError::whole(
+            "expected a .obj or .stl mesh file (Blender: File > Export > Wavefront (.obj))",
+        ));
     }
     let len = std::fs::metadata(path)
-        .map_err(|e| FileError::whole(format!("cannot read {}: {e}", path.display())))?
+        .map_err(|e| FileError::whole(format!("cannot read it: {e}")))?
         .len();
     if len > MAX_FILE_BYTES {
         return Err(FileError::whole(format!(
-            "{} is {len} bytes; mesh files up to {MAX_FILE_BYTES} bytes are read",
-            path.display()
+            "the file is {len} bytes; mesh files up to {MAX_FILE_BYTES} bytes are read"
         )));
     }
-    let bytes = std::fs::read(path)
-        .map_err(|e| FileError::whole(format!("cannot read {}: {e}", path.display())))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| FileError::whole(format!("cannot read it: {e}")))?;
     let data = if ext == "obj" {
         let text = std::str::from_utf8(&bytes).map_err(|e| {
             FileError::whole(format!(
