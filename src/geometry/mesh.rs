@@ -217,7 +217,7 @@ impl Mesh {
                 cell: 1.0,
                 dims: [0; 3],
                 side: Vec::new(),
-                reach: f32::MAX,
+                near: Vec::new(),
                 band: f32::MAX,
             },
         };
@@ -251,6 +251,7 @@ impl Mesh {
             .map(|p| p.mesh.total_memory_size())
             .sum::<usize>()
             + self.far.side.len()
+            + 4 * self.far.near.len()
     }
 
     /// Every triangle's corners, world space (for drawing).
@@ -274,9 +275,8 @@ impl Mesh {
         }
         match self.far.classify(p) {
             Reach::FarOutside => self.far_outside(p),
-            // Within `reach` + cell·√3 (see FarField): the bounded search finds it.
-            Reach::Near => self
-                .exact(p, self.far.reach + 2.0 * self.far.cell)
+            Reach::Near(within) => self
+                .exact(p, within)
                 .or_else(|| self.exact(p, f32::MAX))
                 .unwrap_or_else(|| self.far_outside(p)),
             Reach::FarInside => self
@@ -373,15 +373,16 @@ impl Mesh {
 
 /// Where a point stands, by the far-field grid.
 enum Reach {
-    /// Possibly within `reach` of the surface: ask the hierarchy.
-    Near,
+    /// Possibly within `reach` of the surface: ask the hierarchy, which finds the surface
+    /// within this distance of the point (an upper bound from the near cell corners).
+    Near(f32),
     FarOutside,
     FarInside,
 }
 
 /// A coarse grid over the mesh's box (grown by `reach`) that tells, in a few nanoseconds,
 /// which points are far from the surface, and on which side: most bees most of the time.
-/// Node values are exact signed distances within `reach` (4 cells) of the surface; the
+/// Nodes within `reach` (4 cells) of the surface keep their exact distance and side; the
 /// other nodes only keep their side, found by flooding from the near ones (no edge between
 /// two far nodes can cross the surface, they are 4 cells from it and an edge is 1 long).
 /// A point whose 8 cell corners are all far is at least `band` = reach − cell·√3 from
@@ -392,7 +393,8 @@ struct FarField {
     dims: [usize; 3],
     /// +1 far outside, −1 far inside, 0 near.
     side: Vec<i8>,
-    reach: f32,
+    /// Near nodes: the distance to the nearest triangle (thickness aside); far: ∞.
+    near: Vec<f32>,
     band: f32,
 }
 
@@ -421,14 +423,21 @@ impl FarField {
         // Near nodes from the hierarchy (in parallel; each node on its own, so the result
         // does not depend on the thread count): 0, and far nodes 2 (side unknown yet).
         use rayon::prelude::*;
-        let (mut side, near_side): (Vec<i8>, Vec<i8>) = (0..count)
+        let half = match mesh.mode {
+            MeshMode::Shell { thickness } => 0.5 * thickness,
+            MeshMode::Solid => 0.0,
+        };
+        let nodes: Vec<(i8, i8, f32)> = (0..count)
             .into_par_iter()
             .map(|i| match mesh.exact(node(i), reach) {
-                Some(q) if q.distance < 0.0 => (0, -1),
-                Some(_) => (0, 1),
-                None => (2, 0),
+                Some(q) if q.distance < 0.0 => (0, -1, -q.distance + half),
+                Some(q) => (0, 1, q.distance + half),
+                None => (2, 0, f32::INFINITY),
             })
-            .unzip();
+            .collect();
+        let mut side: Vec<i8> = nodes.iter().map(|n| n.0).collect();
+        let near_side: Vec<i8> = nodes.iter().map(|n| n.1).collect();
+        let near: Vec<f32> = nodes.iter().map(|n| n.2).collect();
         // Flood each far region from the side of a near node next to it; the grid's rim
         // is outside.
         let at = |x: usize, y: usize, z: usize| x + dims[0] * (y + dims[1] * z);
@@ -495,7 +504,7 @@ impl FarField {
             cell,
             dims,
             side,
-            reach,
+            near,
             band: reach - cell * 3f32.sqrt(),
         }
     }
@@ -514,20 +523,28 @@ impl FarField {
         let b = g.floor().as_uvec3();
         let (x, y, z) = (b.x as usize, b.y as usize, b.z as usize);
         let mut all = 0i32;
+        let mut within = f32::INFINITY;
         for k in 0..8 {
-            let i = (x + (k & 1))
-                + self.dims[0] * ((y + ((k >> 1) & 1)) + self.dims[1] * (z + (k >> 2)));
+            let c = [x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2)];
+            let i = c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2]);
             let s = self.side[i];
             if s == 0 {
-                return Reach::Near;
+                // The surface is within the corner's distance plus the way to it.
+                let corner =
+                    self.origin + self.cell * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+                within = within.min(self.near[i] + (p - corner).length());
             }
             all += s as i32;
+        }
+        if within.is_finite() {
+            // A hair more for rounding.
+            return Reach::Near(within * (1.0 + 1e-5) + 1e-6);
         }
         // Corners on both sides cannot happen (see the type's docs); be exact if they do.
         match all {
             8 => Reach::FarOutside,
             -8 => Reach::FarInside,
-            _ => Reach::Near,
+            _ => Reach::Near(f32::MAX),
         }
     }
 }
