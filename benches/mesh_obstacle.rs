@@ -134,7 +134,7 @@ fn main() {
 
     // By distance from the ball's centre (its surface at 1 m).
     let mut bands = String::new();
-    for r in [0.0f32, 0.5, 0.9, 0.99, 1.01, 1.1, 1.5, 3.0] {
+    for r in [0.05f32, 0.5, 0.9, 0.99, 1.01, 1.1, 1.5, 3.0] {
         let ps: Vec<Vec3> = geometry::fibonacci_sphere(10_000)
             .map(|d| Vec3::new(0.0, 1.0, 0.0) + d * r)
             .collect();

@@ -273,7 +273,20 @@ impl Mesh {
                 normal: Vec3::Y,
             };
         }
-        match self.far.classify(p) {
+        let reach = self.far.classify(p);
+        if matches!(reach, Reach::FarOutside) {
+            return self.far_outside(p);
+        }
+        // The models ask about the same point several times a step (vision, velocity
+        // tuning, the sweep's start): the last exact answer of this thread is kept. A pure
+        // function's memo, so results do not depend on threads or order.
+        let key = (self as *const Mesh as usize, p.to_array().map(f32::to_bits));
+        if let Some((k, q)) = LAST_EXACT.get()
+            && k == key
+        {
+            return q;
+        }
+        let q = match reach {
             Reach::FarOutside => self.far_outside(p),
             Reach::Near(within) => self
                 .exact(p, within)
@@ -282,7 +295,9 @@ impl Mesh {
             Reach::FarInside => self
                 .exact(p, f32::MAX)
                 .unwrap_or_else(|| self.far_outside(p)),
-        }
+        };
+        LAST_EXACT.set(Some((key, q)));
+        q
     }
 
     /// Distance within which [`Mesh::query`] is exact, m.
@@ -369,6 +384,14 @@ impl Mesh {
             }
         }
     }
+}
+
+type QueryKey = (usize, [u32; 3]);
+
+thread_local! {
+    /// The last exact query of this thread: (mesh address, point bits) and its answer.
+    static LAST_EXACT: std::cell::Cell<Option<(QueryKey, super::SurfaceQuery)>> =
+        const { std::cell::Cell::new(None) };
 }
 
 /// Where a point stands, by the far-field grid.
