@@ -176,6 +176,7 @@ class Job:
         if self.shot_text is not None:
             self.bake_shot = self.staging / self.shot_path.name
             self.bake_shot.write_text(self.shot_text, encoding="utf-8")
+            shot_builder.write_mesh_files(self.shot, self.staging)
         fmts = [FORMAT_FILES[f][0] for f in self.formats]
         self.argv = runner.bake_argv(self.binary, self.bake_shot, self.staging, fmts + ["csv"])
         self.process = None
@@ -468,6 +469,7 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
             return {"CANCELLED"}
         source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
         path.write_text(shot_builder.shot_toml(shot, source), encoding="utf-8")
+        shot_builder.write_mesh_files(shot, path.parent)
         self.report({"INFO"}, f"Wrote {path}")
         return {"FINISHED"}
 

@@ -12,6 +12,7 @@ import math
 import re
 
 import bpy
+import numpy as np
 from mathutils import Matrix, Vector
 
 from . import toml_writer
@@ -19,7 +20,12 @@ from . import toml_writer
 C = Matrix(((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0)))
 C_INV = C.transposed()
 
-OBSTACLE_TYPES = ("sphere", "box", "cylinder", "capsule", "plane")
+OBSTACLE_TYPES = ("sphere", "box", "cylinder", "capsule", "plane", "mesh")
+# Objects that can be evaluated to a mesh, and so exported as mesh obstacles.
+MESH_LIKE = {"MESH", "CURVE", "SURFACE", "META", "FONT"}
+# Key of the shot dict holding the mesh files to write beside the shot ({name: OBJ text});
+# not part of the TOML (see shot_toml, write_mesh_files).
+MESH_FILES = "_mesh_files"
 TARGET_TYPES = ("nest", "flower", "attractor")
 TYPE_PROP = "beeswarm_type"
 
@@ -121,8 +127,10 @@ def guess_mesh_shape(points, tol=0.02):
     if all(all(abs(abs(p[i] - c[i]) - h[i]) <= eps for i in range(3)) for p in points):
         return "box"
     radial = [math.hypot(p.x - c.x, p.y - c.y) for p in points]
-    rim = [r for r in radial if r > eps]
-    if (rim and max(rim) - min(rim) <= eps and abs(h.x - h.y) <= eps
+    rim = [(r, p.z > c.z) for r, p in zip(radial, points) if r > eps]
+    # A rim at both ends: a cone (one rim and an apex) is not a cylinder.
+    if (rim and max(r for r, _ in rim) - min(r for r, _ in rim) <= eps
+            and abs(h.x - h.y) <= eps and {top for _, top in rim} == {True, False}
             and all(abs(abs(p.z - c.z) - h.z) <= eps for p in points)):
         return "cylinder"
     radii = [(p - c).length for p in points]
@@ -173,6 +181,46 @@ def _decompose(obj):
         raise UnsupportedShape(f"'{obj.name}' is sheared (a rotated child of a non-uniformly "
                                f"scaled parent); apply the parent's scale")
     return quat.to_matrix(), scale
+
+
+def mesh_obstacle(obj, depsgraph, file_name):
+    """(obstacle entry, OBJ text) of any object that evaluates to a mesh: its evaluated
+    geometry (modifiers applied) in world space, Y-up, metres, triangulated. A closed mesh
+    (every edge shared by two triangles) is a solid; any other is avoided as a shell."""
+    ev = obj.evaluated_get(depsgraph)
+    try:
+        me = ev.to_mesh()
+    except RuntimeError:
+        me = None
+    if me is None:
+        raise UnsupportedShape(f"'{obj.name}' has no mesh to avoid")
+    try:
+        me.calc_loop_triangles()
+        n, t = len(me.vertices), len(me.loop_triangles)
+        if t == 0:
+            raise UnsupportedShape(f"'{obj.name}' has no faces to avoid (only vertices or "
+                                   f"edges); give it faces or take it out of the obstacle "
+                                   f"collection")
+        co = np.empty(n * 3, dtype=np.float32)
+        me.vertices.foreach_get("co", co)
+        tri = np.empty(t * 3, dtype=np.int64)
+        me.loop_triangles.foreach_get("vertices", tri)
+    finally:
+        ev.to_mesh_clear()
+    mw = np.array(obj.matrix_world, dtype=np.float64)
+    world = co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
+    shot = np.stack([world[:, 0], world[:, 2], -world[:, 1]], axis=1)
+    tri = tri.reshape(t, 3)
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    _, uses = np.unique(edges, axis=0, return_counts=True)
+    closed = bool(np.all(uses == 2))
+    lines = [f"# {obj.name}: world space, Y-up, metres (written by the beeswarm add-on)"]
+    lines += ["v %.7g %.7g %.7g" % tuple(v) for v in shot]
+    lines += ["f %d %d %d" % tuple(f) for f in (tri + 1)]
+    entry = {"type": "mesh", "name": obj.name, "file": file_name}
+    if not closed:
+        entry["mode"] = "shell"
+    return entry, "\n".join(lines) + "\n"
 
 
 def obstacle_entry(obj, kind, warnings):
@@ -368,18 +416,29 @@ def build_shot(scene, settings, name=None):
     if dupes:
         raise ShotBuildError(f"Two swarms are named {dupes[0]}: give each its own name")
 
-    obstacles, problems = [], []
+    obstacles, problems, mesh_files = [], [], {}
+    depsgraph = bpy.context.evaluated_depsgraph_get()
     for obj in _objects(settings.obstacles):
-        if obj.type not in {"MESH", "EMPTY", "CURVE", "SURFACE", "META"}:
+        if obj.type not in MESH_LIKE | {"EMPTY"}:
             continue
         kind = obstacle_kind(obj)
-        if kind is None:
-            problems.append(f"'{obj.name}' is not a sphere, box, cylinder, capsule or plane "
-                            f"(set its custom property {TYPE_PROP}, or take it out of the "
-                            f"obstacle collection)")
+        if kind is None and obj.type == "EMPTY":
+            problems.append(f"'{obj.name}' is an empty of no obstacle shape (set its custom "
+                            f"property {TYPE_PROP}, or take it out of the obstacle collection)")
             continue
         try:
-            obstacles.append(obstacle_entry(obj, kind, warnings))
+            if kind is None or kind == "mesh":
+                # Any other shape: its mesh, written beside the shot.
+                stem = f"{shot_name}.{safe_name(obj.name)}"
+                file_name, k = f"{stem}.obj", 1
+                while file_name in mesh_files:  # two names that read alike as files
+                    k += 1
+                    file_name = f"{stem}_{k}.obj"
+                entry, text = mesh_obstacle(obj, depsgraph, file_name)
+                mesh_files[file_name] = text
+                obstacles.append(entry)
+            else:
+                obstacles.append(obstacle_entry(obj, kind, warnings))
         except UnsupportedShape as e:
             problems.append(str(e))
     if problems:
@@ -418,6 +477,8 @@ def build_shot(scene, settings, name=None):
     }
     if obstacles:
         shot["obstacle"] = obstacles
+    if mesh_files:
+        shot[MESH_FILES] = mesh_files
     if targets:
         shot["target"] = targets
     if any(abs(x) > 0 for x in settings.wind):
@@ -438,4 +499,10 @@ HEADER_MARK = "# Written by the beeswarm Blender add-on"
 def shot_toml(shot, source=""):
     header = (HEADER_MARK[2:] + (f" from {source}" if source else "")
               + ".\nY-up, metres, seconds: Blender (x, y, z) is (x, z, -y) here.")
-    return toml_writer.dumps(shot, header=header)
+    return toml_writer.dumps({k: v for k, v in shot.items() if k != MESH_FILES}, header=header)
+
+
+def write_mesh_files(shot, folder):
+    """Writes the shot's mesh obstacles' files into `folder` (where the shot goes)."""
+    for name, text in shot.get(MESH_FILES, {}).items():
+        (folder / name).write_text(text, encoding="utf-8")

@@ -1208,3 +1208,82 @@ fn outputs_are_checked_before_the_work_and_endless_inputs_refused() {
         assert_says(&run.stderr, &["key `swarm[0].preset`", "larger than 16 MB"]);
     }
 }
+
+#[test]
+fn mesh_files_missing_malformed_empty_or_open() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let shot = |extra: &str| {
+        std::fs::write(
+            p.join("shot.toml"),
+            format!(
+                "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"mesh\"\nfile = \"m.obj\"\n{extra}"
+            ),
+        )
+        .unwrap();
+        let run = beeswarm(p, &["bake", "shot.toml", "--out", "out", "--format", "csv"]);
+        assert_eq!(run.code, 2, "{}", run.stderr);
+        assert!(!p.join("out").exists(), "nothing written");
+        run.stderr
+    };
+    assert_says(
+        &shot(""),
+        &[
+            "shot.toml:5:8:",
+            "key `obstacle[0].file`",
+            "m.obj: cannot read it",
+        ],
+    );
+    // A face naming a vertex that is not there: located in the mesh file, and back.
+    std::fs::write(p.join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap();
+    assert_says(
+        &shot(""),
+        &[
+            "m.obj:4:1: key `obstacle[0].file`: vertex index 9 does not exist",
+            " 4 | f 1 2 9",
+            "hint: the mesh of obstacle[0], `file` at shot.toml:5",
+        ],
+    );
+    std::fs::write(p.join("m.obj"), "v 0 0 0\nv 1 0 inf\n").unwrap();
+    assert_says(
+        &shot(""),
+        &["m.obj:2:1:", "expected a finite number, found \"inf\""],
+    );
+    std::fs::write(p.join("m.obj"), "# no faces\nv 0 0 0\n").unwrap();
+    assert_says(&shot(""), &["m.obj: the file has no triangles"]);
+    // One open triangle: not a solid, but a shell is fine.
+    std::fs::write(p.join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    assert_says(
+        &shot(""),
+        &["the mesh is not closed", "3 open edges", "mode = \"shell\""],
+    );
+    assert_says(
+        &shot("thickness = 0.1\n"),
+        &[
+            "key `obstacle[0].thickness`",
+            "a solid mesh has no `thickness`",
+        ],
+    );
+    assert_says(
+        &shot("mode = \"shell\"\nradius = 1\n"),
+        &["a mesh has no `radius`"],
+    );
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 2);
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"mesh\"\nfile = \"m.obj\"\nmode = \"shell\"\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    // Another format: refused by name.
+    std::fs::write(p.join("m.ply"), "ply\n").unwrap();
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"mesh\"\nfile = \"m.ply\"\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_says(&run.stderr, &["m.ply: expected a .obj or .stl mesh file"]);
+}

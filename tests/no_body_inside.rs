@@ -2,9 +2,11 @@
 //! range: random scenes of overlapping and thin obstacles, fast flight and fine noise,
 //! checked at every frame. The cases are drawn from a fixed seed, so a failure repeats.
 
-use beeswarm::geometry::signed_distance;
+use beeswarm::geometry::mesh::MeshMode;
+use beeswarm::geometry::{Shape, signed_distance};
 use beeswarm::math::Rng;
 use beeswarm::sim::Simulation;
+use glam::Vec3;
 
 mod common;
 
@@ -142,4 +144,258 @@ fn no_body_is_ever_inside_an_obstacle() {
         worst * 1e3
     );
     assert!(checked > 100_000, "the cases must run: {checked}");
+}
+
+/// A random closed blob as OBJ text: a sphere whose radius varies smoothly with direction
+/// (star-shaped, so never self-intersecting), `rings` × `segments` cells, about a metre
+/// across at most.
+fn blob_obj(rng: &mut Rng, rings: u32, segments: u32) -> String {
+    let r0 = rng.range(0.05, 0.35);
+    let (a, b, c) = (
+        rng.range(0.0, 0.5),
+        rng.range(1.0, 4.0),
+        rng.range(0.0, 6.3),
+    );
+    let radius = |th: f32, ph: f32| r0 * (1.0 + a * (b * th).sin() * (2.0 * ph + c).cos());
+    let mut s = format!("v 0 {} 0\n", radius(0.0, 0.0));
+    for i in 1..rings {
+        let th = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..segments {
+            let ph = std::f32::consts::TAU * j as f32 / segments as f32;
+            let r = radius(th, ph);
+            s += &format!(
+                "v {} {} {}\n",
+                r * th.sin() * ph.cos(),
+                r * th.cos(),
+                r * th.sin() * ph.sin()
+            );
+        }
+    }
+    s += &format!("v 0 {} 0\n", -radius(std::f32::consts::PI, 0.0));
+    let bottom = 2 + (rings - 1) * segments;
+    let at = |i: u32, j: u32| 2 + (i - 1) * segments + j % segments;
+    for j in 0..segments {
+        s += &format!("f 1 {} {}\n", at(1, j + 1), at(1, j));
+        s += &format!("f {bottom} {} {}\n", at(rings - 1, j), at(rings - 1, j + 1));
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            s += &format!(
+                "f {} {} {} {}\n",
+                at(i, j),
+                at(i, j + 1),
+                at(i + 1, j + 1),
+                at(i + 1, j)
+            );
+        }
+    }
+    s
+}
+
+/// A random open sheet as OBJ text: a wavy square, 1 m a side, avoided as a shell.
+fn sheet_obj(rng: &mut Rng) -> String {
+    let n = 12;
+    let (amp, k) = (rng.range(0.0, 0.15), rng.range(2.0, 9.0));
+    let mut s = String::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            let (x, z) = (i as f32 / n as f32 - 0.5, j as f32 / n as f32 - 0.5);
+            s += &format!("v {x} {} {z}\n", amp * (k * x).sin() * (k * z).cos());
+        }
+    }
+    let at = |i: u32, j: u32| 1 + i * (n + 1) + j;
+    for i in 0..n {
+        for j in 0..n {
+            s += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                at(i, j),
+                at(i, j + 1),
+                at(i + 1, j + 1),
+                at(i, j),
+                at(i + 1, j + 1),
+                at(i + 1, j)
+            );
+        }
+    }
+    s
+}
+
+/// A scene of 1–3 mesh obstacles (closed blobs, some thin and flattened by the scale, and
+/// open sheets), randomly placed, written beside the shot in `dir`.
+fn mesh_scene(case: u64, dir: &std::path::Path) -> String {
+    let mut rng = Rng::new(2026, case, 22);
+    let model = ["bee", "brownian", "boids", "curl"][case as usize % 4];
+    let speed = if rng.f32() < 0.5 {
+        rng.range(0.5, 3.0)
+    } else {
+        rng.range(10.0, 50.0)
+    };
+    let mut src = format!(
+        "[scene]\nframes = [1, 25]\nseed = {case}\n[[swarm]]\ncount = 30\nmodel = \"{model}\"\n\
+         params = {{ speed = {speed:.2} }}\nspawn = {{ center = [0, 1, 0], size = [0.8, 0.8, 0.8] }}\n"
+    );
+    for k in 0..1 + (rng.f32() * 3.0) as usize {
+        let file = format!("m{case}_{k}.obj");
+        let shell = rng.f32() < 0.3;
+        let text = if shell {
+            sheet_obj(&mut rng)
+        } else {
+            blob_obj(&mut rng, 10, 20)
+        };
+        std::fs::write(dir.join(&file), text).unwrap();
+        // Non-uniform scale: now and then a blob squashed into a 5–20 mm board.
+        let squash = if rng.f32() < 0.3 {
+            rng.range(0.02, 0.08)
+        } else {
+            rng.range(0.5, 2.0)
+        };
+        src += &format!(
+            "[[obstacle]]\ntype = \"mesh\"\nfile = \"{file}\"\nposition = [{:.3}, {:.3}, {:.3}]\n\
+             rotation = [{:.1}, {:.1}, {:.1}]\nscale = [{:.3}, {squash:.3}, {:.3}]\n",
+            rng.range(-0.4, 0.4),
+            rng.range(0.6, 1.4),
+            rng.range(-0.4, 0.4),
+            rng.range(0.0, 180.0),
+            rng.range(0.0, 180.0),
+            rng.range(0.0, 180.0),
+            rng.range(0.5, 2.0),
+            rng.range(0.5, 2.0),
+        );
+        if shell {
+            src += &format!(
+                "mode = \"shell\"\nthickness = {:.3}\n",
+                rng.range(0.0, 0.02)
+            );
+        }
+    }
+    src
+}
+
+/// The closest point to `p` on triangle abc (Ericson, Real-Time Collision Detection 5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Whether the ray from `p` along `dir` crosses triangle abc (Möller–Trumbore).
+fn ray_crosses(p: Vec3, dir: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
+    let (e1, e2) = (b - a, c - a);
+    let h = dir.cross(e2);
+    let det = e1.dot(h);
+    if det.abs() < 1e-12 {
+        return false;
+    }
+    let s = p - a;
+    let u = s.dot(h) / det;
+    let q = s.cross(e1);
+    let v = dir.dot(q) / det;
+    u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(q) / det > 0.0
+}
+
+/// The signed distance to a mesh obstacle by brute force, independent of the query
+/// structure under test: the nearest of all triangles, and for a solid the parity of
+/// three rays' crossings (the majority, so a ray through an edge does not decide).
+fn brute_signed_distance(tris: &[[Vec3; 3]], mode: MeshMode, p: Vec3) -> f32 {
+    let d = tris
+        .iter()
+        .map(|t| (p - closest_on_triangle(p, t[0], t[1], t[2])).length())
+        .fold(f32::INFINITY, f32::min);
+    match mode {
+        MeshMode::Shell { thickness } => d - 0.5 * thickness,
+        MeshMode::Solid => {
+            let dirs = [
+                Vec3::new(0.5377, 0.7093, 0.4559),
+                Vec3::new(-0.6131, 0.2207, 0.7586),
+                Vec3::new(0.3119, -0.8834, 0.3497),
+            ];
+            let inside = dirs
+                .iter()
+                .filter(|dir| tris.iter().filter(|t| ray_crosses(p, **dir, **t)).count() % 2 == 1)
+                .count()
+                >= 2;
+            if inside { -d } else { d }
+        }
+    }
+}
+
+#[test]
+fn no_body_is_ever_inside_a_mesh_obstacle() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0usize;
+    let mut worst = f32::INFINITY;
+    let mut touching = 0usize;
+    for case in 0..60 {
+        let src = mesh_scene(case, dir.path());
+        let Ok(shot) = beeswarm::shot::parse(&src, &dir.path().join("t.toml"), dir.path()) else {
+            continue;
+        };
+        let radius = shot.swarms[0].bee.radius;
+        let meshes: Vec<(Vec<[Vec3; 3]>, MeshMode)> = shot
+            .obstacles
+            .iter()
+            .map(|o| match o.shape {
+                Shape::Mesh { mesh } => (mesh.triangles().collect(), mesh.mode()),
+                _ => unreachable!("mesh scenes hold meshes only"),
+            })
+            .collect();
+        let mut sim = Simulation::new(&shot);
+        loop {
+            for s in sim.record() {
+                for (p, scale) in s.position.iter().zip(&s.scale) {
+                    let ri = radius * scale;
+                    for (o, (tris, mode)) in shot.obstacles.iter().zip(&meshes) {
+                        let gap = brute_signed_distance(tris, *mode, *p) - ri;
+                        worst = worst.min(gap);
+                        touching += usize::from(gap < 1e-3);
+                        assert!(
+                            gap > -1e-4,
+                            "case {case}, frame {}: a body {:.2} mm inside {}\n{src}",
+                            sim.frame(),
+                            -gap * 1e3,
+                            o.name
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+            if sim.done() {
+                break;
+            }
+            sim.advance();
+        }
+    }
+    println!(
+        "{checked} body–mesh checks, {touching} within 1 mm of a surface, smallest gap {:.4} mm",
+        worst * 1e3
+    );
+    assert!(checked > 50_000, "the cases must run: {checked}");
+    // The bodies must actually meet the meshes for the check to mean anything.
+    assert!(touching > 1_000, "too few contacts: {touching}");
 }

@@ -2,6 +2,7 @@
 
 use super::resources::{Needs, bytes, density};
 use crate::error::Result;
+use crate::geometry::mesh::MeshMode;
 use crate::shot::{Region, Shape, Shot, Swarm};
 use clap::Args;
 use std::path::Path;
@@ -232,11 +233,30 @@ pub fn summary(shot: &Shot) -> String {
     let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
     for o in &shot.obstacles {
         let kind = match o.shape {
-            Shape::Sphere { .. } => "sphere",
-            Shape::Box { .. } => "box",
-            Shape::Capsule { .. } => "capsule",
-            Shape::Cylinder { .. } => "cylinder",
-            Shape::Plane { .. } => "plane",
+            Shape::Sphere { .. } => "sphere".to_owned(),
+            Shape::Box { .. } => "box".to_owned(),
+            Shape::Capsule { .. } => "capsule".to_owned(),
+            Shape::Cylinder { .. } => "cylinder".to_owned(),
+            Shape::Plane { .. } => "plane".to_owned(),
+            Shape::Mesh { mesh } => {
+                let (lo, hi) = mesh.bounds();
+                let how = match mesh.mode() {
+                    MeshMode::Solid => format!("solid, {} closed piece(s)", mesh.piece_count()),
+                    MeshMode::Shell { thickness } => {
+                        format!("shell {} m thick", num(thickness as f64))
+                    }
+                };
+                format!(
+                    "mesh, {} triangles, {how}, from [{}, {}, {}] to [{}, {}, {}] m",
+                    mesh.triangle_count(),
+                    num(lo.x as f64),
+                    num(lo.y as f64),
+                    num(lo.z as f64),
+                    num(hi.x as f64),
+                    num(hi.y as f64),
+                    num(hi.z as f64)
+                )
+            }
         };
         let _ = writeln!(s, "    {}: {kind}", o.name);
     }

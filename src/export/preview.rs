@@ -421,6 +421,7 @@ fn shape_name(s: &Shape) -> &'static str {
         Shape::Capsule { .. } => "capsule",
         Shape::Cylinder { .. } => "cylinder",
         Shape::Plane { .. } => "plane",
+        Shape::Mesh { .. } => "mesh",
     }
 }
 
@@ -474,6 +475,12 @@ fn outline(s: &Shape) -> Vec<Vec3> {
                 .collect()
         }
         Shape::Plane { .. } => Vec::new(),
+        // The vertices (of a large mesh every k-th triangle's, enough for its outline at
+        // preview size).
+        Shape::Mesh { mesh } => {
+            let stride = mesh.triangle_count().div_ceil(20_000).max(1);
+            mesh.triangles().step_by(stride).flatten().collect()
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 //! at a centre) get a well-defined normal instead of NaN.
 
 pub mod grid;
+pub mod mesh;
 
 use glam::{Quat, Vec3};
 pub use grid::Grid;
@@ -38,6 +39,11 @@ pub enum Shape {
     Plane {
         point: Vec3,
         normal: Vec3,
+    },
+    /// A triangle mesh in world space (see [`mesh`]). Loaded once per shot and never
+    /// freed, so that shapes stay plain `Copy` values shared by every thread.
+    Mesh {
+        mesh: &'static mesh::Mesh,
     },
 }
 
@@ -107,6 +113,7 @@ pub fn signed_distance(shape: &Shape, p: Vec3) -> f32 {
 
 pub fn query(shape: &Shape, p: Vec3) -> SurfaceQuery {
     match *shape {
+        Shape::Mesh { mesh } => mesh.query(p),
         Shape::Sphere { center, radius } => {
             let n = dir_or(p - center, Vec3::Y);
             SurfaceQuery {

@@ -57,3 +57,7 @@ pub const WINGS: &str = "blur";
 pub const WING_FLAP_HZ: f64 = 6.0;
 /// The glTF layout when the shot does not say: today's node per part.
 pub const GLTF_LAYOUT: &str = "parts";
+
+/// Thickness of a `mode = "shell"` mesh obstacle, m: a thin board, so bees never graze
+/// an open surface edge-on.
+pub const MESH_SHELL_THICKNESS: f64 = 0.01;

@@ -5,6 +5,7 @@
 
 pub mod defaults;
 pub mod locate;
+pub mod mesh_file;
 mod output;
 mod resolve;
 pub mod schema;

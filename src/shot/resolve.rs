@@ -6,6 +6,7 @@ use super::locate::Locator;
 use super::schema::*;
 use super::*;
 use crate::error::ShotError;
+use crate::geometry::mesh::{Mesh, MeshError as MeshErr, MeshMode};
 use crate::model::ParamValues;
 use glam::Quat;
 
@@ -435,7 +436,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
 
     let mut obstacles = Vec::new();
     for (i, ro) in raw.obstacle.iter().enumerate() {
-        obstacles.push(resolve_obstacle(&cx, i, ro)?);
+        obstacles.push(resolve_obstacle(&cx, i, ro, base)?);
     }
     let mut targets = Vec::new();
     for (i, rt) in raw.target.iter().enumerate() {
@@ -880,17 +881,24 @@ fn euler_deg(v: Vec3) -> Quat {
     Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x)
 }
 
-fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, ShotError> {
+fn resolve_obstacle(
+    cx: &Ctx,
+    i: usize,
+    ro: &RawObstacle,
+    base: &Path,
+) -> Result<Obstacle, ShotError> {
     let k = |key: &str| format!("obstacle[{i}].{key}");
     let kind = cx.required(
         &k("type"),
         &ro.kind,
-        "the obstacle type: \"sphere\", \"box\", \"capsule\", \"cylinder\" or \"plane\"",
+        "the obstacle type: \"sphere\", \"box\", \"capsule\", \"cylinder\", \"plane\" or \"mesh\"",
     )?;
     let kind = cx.one_of(
         &k("type"),
         &kind,
-        &["sphere", "box", "capsule", "shaft", "cylinder", "plane"],
+        &[
+            "sphere", "box", "capsule", "shaft", "cylinder", "plane", "mesh",
+        ],
     )?;
     let name = ro
         .name
@@ -920,6 +928,7 @@ fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, Sh
         "box" => &["center", "size", "rotation"],
         "capsule" | "shaft" => &["a", "b", "radius"],
         "cylinder" => &["center", "radius", "height", "rotation"],
+        "mesh" => &["file", "mode", "thickness", "position", "rotation", "scale"],
         _ => &["point", "normal"],
     };
     let present = [
@@ -932,6 +941,11 @@ fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, Sh
         ("b", ro.b.is_some()),
         ("point", ro.point.is_some()),
         ("normal", ro.normal.is_some()),
+        ("file", ro.file.is_some()),
+        ("mode", ro.mode.is_some()),
+        ("thickness", ro.thickness.is_some()),
+        ("position", ro.position.is_some()),
+        ("scale", ro.scale.is_some()),
     ];
     if let Some((key, _)) = present.iter().find(|(key, p)| *p && !allowed.contains(key)) {
         return Err(cx.hint(
@@ -978,6 +992,9 @@ fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, Sh
                 * 0.5,
             rotation: rotation()?,
         },
+        "mesh" => Shape::Mesh {
+            mesh: resolve_mesh(cx, i, ro, base, rotation()?)?,
+        },
         _ => {
             let point = cx.vec(&k("point"), ro.point.unwrap_or([0.0; 3]))?;
             let n = cx.vec(&k("normal"), ro.normal.unwrap_or([0.0, 1.0, 0.0]))?;
@@ -991,6 +1008,118 @@ fn resolve_obstacle(cx: &Ctx, i: usize, ro: &RawObstacle) -> Result<Obstacle, Sh
         }
     };
     Ok(Obstacle { name, shape })
+}
+
+/// A `type = "mesh"` obstacle: the file read, placed in the world (scale, then
+/// `rotation`, then position), checked and turned into a query structure. The same file
+/// with the same placement and mode is built once per process and shared.
+fn resolve_mesh(
+    cx: &Ctx,
+    i: usize,
+    ro: &RawObstacle,
+    base: &Path,
+    rotation: Quat,
+) -> Result<&'static Mesh, ShotError> {
+    let k = |key: &str| format!("obstacle[{i}].{key}");
+    let file = cx.required(
+        &k("file"),
+        &ro.file,
+        "the mesh file, .obj or .stl, relative to the shot",
+    )?;
+    let mode_name = ro.mode.clone().unwrap_or_else(|| "solid".to_owned());
+    let mode = match cx.one_of(&k("mode"), &mode_name, &["solid", "shell"])? {
+        "solid" => {
+            if ro.thickness.is_some() {
+                return Err(cx.hint(
+                    &k("thickness"),
+                    "a solid mesh has no `thickness`",
+                    "`thickness` thickens an open mesh: add mode = \"shell\"",
+                ));
+            }
+            MeshMode::Solid
+        }
+        _ => MeshMode::Shell {
+            thickness: cx.range(
+                &k("thickness"),
+                ro.thickness.unwrap_or(d::MESH_SHELL_THICKNESS),
+                0.0,
+                1000.0,
+                "a thickness from 0 to 1000 m",
+            )? as f32,
+        },
+    };
+    let position = cx.vec(&k("position"), ro.position.unwrap_or([0.0; 3]))?;
+    let scale = cx.size(&k("scale"), ro.scale.unwrap_or([1.0; 3]))?;
+    let path = base.join(&file);
+    let located = |e: mesh_file::FileError| -> ShotError {
+        let mut err = cx.err(&k("file"), e.message.clone());
+        if e.line > 0 {
+            // The problem is inside the mesh file: point there, and back to the shot.
+            err.hint = Some(format!(
+                "the mesh of obstacle[{i}], `file` at {}:{}",
+                err.file.display(),
+                err.line
+            ));
+            err.file = path.clone();
+            err.line = e.line;
+            err.column = 1;
+            err.source_line = e.source_line;
+        } else {
+            err.message = format!("{}: {}", path.display(), e.message);
+        }
+        err
+    };
+    let data = mesh_file::read(&path).map_err(located)?;
+    let vertices: Vec<Vec3> = data
+        .vertices
+        .iter()
+        .map(|v| position + rotation * (scale * *v))
+        .collect();
+    let key = mesh_key(&vertices, &data.triangles, mode);
+    let mut loaded = LOADED_MESHES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, m)) = loaded.iter().find(|(k, _)| *k == key) {
+        return Ok(*m);
+    }
+    let mesh = Mesh::new(&vertices, &data.triangles, mode).map_err(|e| {
+        let hint = match e {
+            MeshErr::NotClosed { .. } | MeshErr::Inconsistent { .. } => Some(
+                "close the mesh (in Blender: Select All by Trait > Non Manifold, then fill), \
+                 or avoid it as a surface with mode = \"shell\""
+                    .to_owned(),
+            ),
+            _ => None,
+        };
+        let mut err = cx.err(&k("file"), format!("{}: {e}", path.display()));
+        err.hint = hint;
+        err
+    })?;
+    // Leaked on purpose: shapes are `Copy` and shared by every thread for the whole
+    // bake; each distinct mesh is built once per process (see LOADED_MESHES).
+    let mesh: &'static Mesh = Box::leak(Box::new(mesh));
+    loaded.push((key, mesh));
+    Ok(mesh)
+}
+
+/// Meshes built so far in this process, by [`mesh_key`]: resolving the same shot again
+/// (a check, then a bake; a test suite) reuses them instead of leaking another copy.
+static LOADED_MESHES: std::sync::Mutex<Vec<(u64, &'static Mesh)>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// A digest of the placed vertices, the triangles and the mode.
+fn mesh_key(vertices: &[Vec3], triangles: &[[u32; 3]], mode: MeshMode) -> u64 {
+    use std::hash::{Hash, Hasher};
+    // SipHash with fixed keys: the same digest in every run.
+    #[allow(deprecated)]
+    let mut h = std::hash::SipHasher::new();
+    for v in vertices {
+        v.to_array().map(f32::to_bits).hash(&mut h);
+    }
+    triangles.hash(&mut h);
+    match mode {
+        MeshMode::Solid => 0u32.hash(&mut h),
+        MeshMode::Shell { thickness } => thickness.to_bits().hash(&mut h),
+    }
+    h.finish()
 }
 
 fn resolve_target(

@@ -101,6 +101,13 @@ pub struct RawObstacle {
     pub b: Option<V3>,
     pub point: Option<V3>,
     pub normal: Option<V3>,
+    /// Mesh obstacles: the mesh file (relative to the shot), how it is avoided, and its
+    /// placement (scale, then rotation, then position).
+    pub file: Option<String>,
+    pub mode: Option<String>,
+    pub thickness: Option<f64>,
+    pub position: Option<V3>,
+    pub scale: Option<V3>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

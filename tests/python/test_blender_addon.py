@@ -402,12 +402,81 @@ def test_unsupported_obstacle_shapes_are_errors_naming_the_objects(scene, beeswa
         shot_builder.build_shot(scene, scene.beeswarm)
     msg = str(err.value)
     for name, why in (("egg", "ellipsoid"), ("oval_post", "elliptic cylinder"),
-                      ("leaning_box", "sheared"), ("rock", "not a sphere, box")):
+                      ("leaning_box", "sheared"), ("rock", "has no faces")):
         assert f"'{name}'" in msg and why in msg, (name, msg)
     assert "'Cube'" not in msg
     with pytest.raises(RuntimeError, match="egg"):
         bake("USD", beeswarm_bin)
     assert not shot_collections("bltest")
+
+
+def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, beeswarm_bin,
+                                                                     tmp_path):
+    """A monkey head (open: avoided as a shell) and a cone (closed: a solid, not the
+    cylinder it used to become) are written as OBJ meshes in world space, Y-up, with their
+    modifiers; the bake keeps every bee out of them."""
+    from mathutils.bvhtree import BVHTree
+    bpy.ops.mesh.primitive_monkey_add(size=0.8, location=(0.0, 0.0, 1.0),
+                                      rotation=(0.0, 0.0, math.radians(30)))
+    monkey = bpy.context.active_object
+    monkey.name = "Suzanne"
+    monkey.modifiers.new("sub", "SUBSURF").levels = 1
+    for c in list(monkey.users_collection):
+        c.objects.unlink(monkey)
+    bpy.data.collections["Obstacles"].objects.link(monkey)
+    bpy.ops.mesh.primitive_cone_add(radius1=0.15, depth=0.5, location=(0.6, 0.3, 0.25))
+    cone = bpy.context.active_object
+    cone.name = "cone"
+    for c in list(cone.users_collection):
+        c.objects.unlink(cone)
+    bpy.data.collections["Obstacles"].objects.link(cone)
+    add_empty("Nest", (0.0, 0.9, 1.0))
+    sw = scene.beeswarm.swarms[0]
+    sw.spawn_center = (0.0, -0.9, 1.0)
+    sw.spawn_size = (0.6, 0.4, 0.6)
+    bpy.context.view_layer.update()
+
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
+    entries = {o["name"]: o for o in shot["obstacle"]}
+    assert entries["Suzanne"] == {"type": "mesh", "name": "Suzanne", "mode": "shell",
+                                  "file": "bltest.Suzanne.obj"}
+    assert entries["cone"] == {"type": "mesh", "name": "cone", "file": "bltest.cone.obj"}
+    assert "_mesh_files" not in tomllib.loads(shot_builder.shot_toml(shot))
+    text = shot[shot_builder.MESH_FILES]["bltest.Suzanne.obj"]
+    verts = [Vector(map(float, ln.split()[1:])) for ln in text.splitlines() if ln.startswith("v ")]
+    faces = [ln for ln in text.splitlines() if ln.startswith("f ")]
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    ev = monkey.evaluated_get(depsgraph)
+    assert len(verts) == len(ev.data.vertices) > 500  # subdivided: the evaluated mesh
+    assert len(faces) == len(ev.data.loop_triangles)
+    world = [monkey.matrix_world @ v.co for v in ev.data.vertices]
+    assert max((blender_from_shot(a) - b).length for a, b in zip(verts, world)) < 1e-5
+
+    assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
+    folder = tmp_path / "beeswarm_cache" / "bltest"
+    assert {"bltest.Suzanne.obj", "bltest.cone.obj", "bltest.shot.toml"} <= \
+        {p.name for p in folder.iterdir()}
+    tracks = read_tracks(folder / "bltest.tracks.csv")
+    trees = {o.name: BVHTree.FromObject(o, depsgraph) for o in (monkey, cone)}
+    gaps = {name: [] for name in trees}
+    for bee in tracks.values():
+        for row in bee.values():
+            p = blender_from_shot((row["x"], row["y"], row["z"]))
+            for name, tree in trees.items():
+                # BVHTree works in the object's local space.
+                obj = bpy.data.objects[name]
+                local = obj.matrix_world.inverted() @ p
+                hit = tree.find_nearest(local)
+                near = obj.matrix_world @ hit[0]
+                # The cone is convex: inside is behind every face.
+                inside = name == "cone" and all(
+                    (local - f.center).dot(f.normal) < 0 for f in cone.data.polygons)
+                gaps[name].append(-(p - near).length if inside else (p - near).length)
+    # The monkey is a 1 cm shell: centres stay half of it away; nobody inside the cone.
+    assert min(gaps["Suzanne"]) > 0.005 - 1e-4, min(gaps["Suzanne"])
+    assert min(gaps["cone"]) > 0.0, min(gaps["cone"])
+    # The swarm met the monkey on its way to the nest.
+    assert sum(g < 0.1 for g in gaps["Suzanne"]) > 20, sorted(gaps["Suzanne"])[:5]
 
 
 def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
