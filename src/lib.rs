@@ -20,6 +20,7 @@ pub mod model;
 pub mod shot;
 pub mod sim;
 pub mod species;
+pub mod wedge;
 
 pub use error::{Error, Result};
 pub mod eval;

@@ -1,10 +1,12 @@
-//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`. `main.rs` only calls
+//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`, `wedge`,
+//! `gather`. `main.rs` only calls
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
 mod bench;
 mod check;
 pub mod models;
+mod wedge;
 
 use crate::error::Error;
 use clap::{Parser, Subcommand};
@@ -25,6 +27,8 @@ pub enum Command {
     Models(models::ModelsArgs),
     Eval(crate::eval::EvalArgs),
     Calibrate(crate::eval::CalibrateArgs),
+    Wedge(wedge::WedgeArgs),
+    Gather(wedge::GatherArgs),
 }
 
 /// Parses arguments, runs the command, prints any error, returns the exit code.
@@ -44,6 +48,8 @@ pub fn main() -> i32 {
         Command::Models(a) => models::run(a),
         Command::Eval(a) => crate::eval::run_eval(&a),
         Command::Calibrate(a) => crate::eval::run_calibrate(&a),
+        Command::Wedge(a) => wedge::run(a),
+        Command::Gather(a) => wedge::gather(a),
     };
     match result {
         Ok(()) => 0,

@@ -1,0 +1,195 @@
+//! Wedges: one shot baked many ways (seeds, speeds, presets) and looked at side by side.
+//!
+//! `beeswarm wedge` writes a wedge folder:
+//!
+//! ```text
+//! DIR/wedge.json                 what the wedge is: the shot, every variant and its values
+//! DIR/variants/<name>_<k>.toml   variant k's shot (k = 1, 2, …), checked, standing alone
+//! DIR/presets/                   preset files the variants use, copied
+//! DIR/job.yaml                   the Open Job Description job (see `job`)
+//! DIR/bundle/                    the same job as an AWS Deadline Cloud job bundle
+//! DIR/caches/<name>_<k>/         variant k's caches and preview, once baked
+//! DIR/<name>.contact.png         the contact sheet, once gathered
+//! ```
+//!
+//! Every variant is resolved and checked before anything is written, so a bad variant
+//! fails the whole wedge with a located error. See docs/farm.md.
+
+pub mod contact_sheet;
+pub mod job;
+pub mod runner;
+pub mod variant_shot;
+pub mod vary;
+
+use crate::atomic::AtomicFile;
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+pub use vary::{Variant, Vary};
+
+/// The name of a wedge folder's manifest.
+pub const MANIFEST: &str = "wedge.json";
+
+/// `DIR/wedge.json`: what `gather` and the runner read back.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    /// The wedged shot's scene name.
+    pub name: String,
+    /// The wedged shot file, as given.
+    pub shot: String,
+    pub variants: Vec<ManifestVariant>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ManifestVariant {
+    /// 1-based; the OpenJD task parameter `Variant`.
+    pub index: usize,
+    /// `<name>_<index>`: the variant's scene name, shot file stem and cache folder.
+    pub name: String,
+    pub label: String,
+    /// (key, TOML value) pairs, as given on the command line.
+    pub values: Vec<(String, String)>,
+}
+
+impl ManifestVariant {
+    /// The variant's shot, relative to the wedge folder.
+    pub fn shot(&self) -> PathBuf {
+        Path::new("variants").join(format!("{}.toml", self.name))
+    }
+    /// The variant's cache folder, relative to the wedge folder.
+    pub fn caches(&self) -> PathBuf {
+        Path::new("caches").join(&self.name)
+    }
+    /// The variant's preview image, relative to the wedge folder.
+    pub fn preview(&self) -> PathBuf {
+        self.caches().join(format!("{}.preview.png", self.name))
+    }
+}
+
+/// What `beeswarm wedge` was asked for.
+pub struct WedgeSpec<'a> {
+    pub shot: &'a Path,
+    pub variants: &'a [Variant],
+    pub out: &'a Path,
+    /// The program the job's tasks run.
+    pub beeswarm: &'a str,
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    f.commit()
+}
+
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| Error::input(format!("cannot create the folder {}: {e}", dir.display())))
+}
+
+/// Checks every variant, then writes the wedge folder; returns its manifest.
+pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
+    let shot = crate::shot::load(spec.shot)?;
+    // Read again as text: variants are the shot's own text with keys set.
+    let src = String::from_utf8(
+        crate::shot::read_bounded(spec.shot).map_err(|e| Error::io(spec.shot, e))?,
+    )
+    .map_err(|_| Error::input(format!("{}: not UTF-8", spec.shot.display())))?;
+    let shot_dir = spec
+        .shot
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let mut presets = variant_shot::CopiedPresets::default();
+    let mut texts = Vec::with_capacity(spec.variants.len());
+    let mut entries = Vec::with_capacity(spec.variants.len());
+    for (k, v) in spec.variants.iter().enumerate() {
+        let index = k + 1;
+        let name = format!("{}_{index}", shot.name);
+        let varied = variant_shot::varied_text(&src, spec.shot, index, v)?;
+        let text = variant_shot::standalone_text(&varied, &shot_dir, &name, &mut presets)?;
+        texts.push(text);
+        entries.push(ManifestVariant {
+            index,
+            name,
+            label: v.label(),
+            values: v.assignments.clone(),
+        });
+    }
+    create_dir(spec.out)?;
+    let dir = spec
+        .out
+        .canonicalize()
+        .map_err(|e| Error::io(spec.out, e))?;
+    create_dir(&dir.join("variants"))?;
+    // The standalone variants must parse where they will live.
+    if !presets.files.is_empty() {
+        create_dir(&dir.join("presets"))?;
+        for (source, name) in &presets.files {
+            let bytes = crate::shot::read_bounded(source).map_err(|err| Error::io(source, err))?;
+            write_file(&dir.join("presets").join(name), &bytes)?;
+        }
+    }
+    for (text, e) in texts.iter().zip(&entries) {
+        let path = dir.join(e.shot());
+        crate::shot::parse(text, &path, &dir.join("variants")).map_err(|err| {
+            Error::bake(format!("variant {} does not stand alone: {err}", e.index))
+        })?;
+    }
+    for (text, e) in texts.iter().zip(&entries) {
+        write_file(&dir.join(e.shot()), text.as_bytes())?;
+    }
+    let manifest = Manifest {
+        name: shot.name.clone(),
+        shot: spec.shot.display().to_string(),
+        variants: entries,
+    };
+    let json = serde_json::to_string_pretty(&manifest).expect("a manifest serialises");
+    write_file(&dir.join(MANIFEST), format!("{json}\n").as_bytes())?;
+    let spec_for = |wedge_dir| job::JobSpec {
+        name: &shot.name,
+        variants: manifest.variants.len(),
+        wedge_dir,
+        beeswarm: spec.beeswarm,
+    };
+    write_file(
+        &dir.join("job.yaml"),
+        job::template(&spec_for(".")).as_bytes(),
+    )?;
+    create_dir(&dir.join("bundle"))?;
+    write_file(
+        &dir.join("bundle/template.yaml"),
+        job::template(&spec_for("..")).as_bytes(),
+    )?;
+    Ok(manifest)
+}
+
+/// Reads a wedge folder's manifest.
+pub fn read_manifest(dir: &Path) -> Result<Manifest> {
+    let path = dir.join(MANIFEST);
+    let bytes = std::fs::read(&path).map_err(|e| {
+        Error::input(format!(
+            "{}: {e} (expected a wedge folder written by beeswarm wedge)",
+            path.display()
+        ))
+    })?;
+    serde_json::from_slice(&bytes)
+        .map_err(|e| Error::input(format!("{}: not a wedge manifest: {e}", path.display())))
+}
+
+/// The gather step: the contact sheet of every variant's preview, `DIR/<name>.contact.png`.
+pub fn gather(dir: &Path) -> Result<PathBuf> {
+    let manifest = read_manifest(dir)?;
+    let cells: Vec<(String, PathBuf)> = manifest
+        .variants
+        .iter()
+        .map(|v| (format!("{}: {}", v.index, v.label), dir.join(v.preview())))
+        .collect();
+    let title = format!(
+        "wedge {} - {} variants",
+        manifest.name,
+        manifest.variants.len()
+    );
+    let sheet = contact_sheet::render(&title, &cells)?;
+    sheet.save_png(&dir.join(format!("{}.contact.png", manifest.name)))
+}
