@@ -27,6 +27,10 @@ pub struct WedgeArgs {
     /// The beeswarm program the job's tasks run (default: this one, by its full path).
     #[arg(long)]
     pub beeswarm: Option<String>,
+    /// Frames between a bake task's checkpoints: a pre-empted task run again loses at
+    /// most this many frames (0: no checkpoints).
+    #[arg(long, default_value_t = 24, value_name = "N")]
+    pub checkpoint_every: u32,
     /// Also bake every variant here and gather the contact sheet (no farm needed).
     #[arg(long)]
     pub run: bool,
@@ -58,6 +62,7 @@ pub fn run(a: WedgeArgs) -> Result<()> {
         variants: &variants,
         out: &a.out,
         beeswarm: &beeswarm,
+        checkpoint_every: a.checkpoint_every,
     })?;
     if !a.quiet {
         eprintln!(
@@ -78,7 +83,7 @@ pub fn run(a: WedgeArgs) -> Result<()> {
         let _ = ctrlc::set_handler(|| {
             crate::atomic::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed)
         });
-        let sheet = wedge::runner::run(&a.out, &manifest, a.jobs, a.quiet)?;
+        let sheet = wedge::runner::run(&a.out, &manifest, a.jobs, a.checkpoint_every, a.quiet)?;
         if !a.quiet {
             eprintln!("wrote {}", sheet.display());
         }

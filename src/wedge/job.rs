@@ -18,6 +18,8 @@ pub struct JobSpec<'a> {
     pub wedge_dir: &'a str,
     /// Default of the `Beeswarm` parameter: the program the tasks run.
     pub beeswarm: &'a str,
+    /// Default of `CheckpointEvery`: frames between a bake's checkpoints (0: none).
+    pub checkpoint_every: u32,
 }
 
 /// The job template, YAML.
@@ -27,6 +29,7 @@ pub fn template(spec: &JobSpec) -> String {
         variants,
         wedge_dir,
         beeswarm,
+        checkpoint_every,
     } = *spec;
     let variant_shot =
         format!("{{{{Param.WedgeDir}}}}/variants/{name}_{{{{Task.Param.Variant}}}}.toml");
@@ -49,6 +52,11 @@ parameterDefinitions:
   minLength: 1
   default: {beeswarm}
   description: The beeswarm program the tasks run (a path, or a name on the worker's PATH).
+- name: CheckpointEvery
+  type: INT
+  minValue: 0
+  default: {checkpoint_every}
+  description: Frames between a bake's checkpoints; a task run again resumes from the last one (0 = none).
 steps:
 - name: Bake
   description: Bakes one variant shot into caches/<variant>/.
@@ -64,6 +72,9 @@ steps:
         args:
         - bake
         - {variant_shot}
+        - --checkpoint-every
+        - "{{{{Param.CheckpointEvery}}}}"
+        - --resume
 - name: Gather
   description: Puts every variant's preview in one labelled contact sheet.
   dependencies:
@@ -82,6 +93,7 @@ steps:
         )),
         wedge_dir = q(wedge_dir),
         beeswarm = q(beeswarm),
+        checkpoint_every = checkpoint_every,
         range = q(&format!("1-{variants}")),
         variant_shot = q(&variant_shot),
     )

@@ -74,6 +74,8 @@ pub struct WedgeSpec<'a> {
     pub out: &'a Path,
     /// The program the job's tasks run.
     pub beeswarm: &'a str,
+    /// Frames between a task's checkpoints (0: none).
+    pub checkpoint_every: u32,
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
@@ -151,6 +153,7 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
         variants: manifest.variants.len(),
         wedge_dir,
         beeswarm: spec.beeswarm,
+        checkpoint_every: spec.checkpoint_every,
     };
     write_file(
         &dir.join("job.yaml"),

@@ -45,8 +45,13 @@ pub fn bake_command(
 /// Bakes every variant of the wedge in `dir`, `parallel` at a time, reporting each as it
 /// ends; then writes the contact sheet. A failed variant fails the run (after the others
 /// finish), naming it.
-pub fn run(dir: &Path, manifest: &Manifest, jobs: usize, quiet: bool) -> Result<PathBuf> {
-    let checkpoint_every = 0;
+pub fn run(
+    dir: &Path,
+    manifest: &Manifest,
+    jobs: usize,
+    checkpoint_every: u32,
+    quiet: bool,
+) -> Result<PathBuf> {
     let exe = std::env::current_exe()
         .map_err(|e| Error::bake(format!("cannot find the beeswarm program: {e}")))?;
     let (parallel, threads) = plan(jobs, manifest.variants.len());
