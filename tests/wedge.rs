@@ -63,8 +63,9 @@ fn writes_checked_variants_and_a_job() {
     assert!(job.contains("specificationVersion: jobtemplate-2023-09"));
     assert!(job.contains("range: \"1-4\""), "{job}");
     assert!(job.contains("dependsOn: Bake"), "{job}");
-    let bundle = std::fs::read_to_string(p.join("w/bundle/template.yaml")).unwrap();
-    assert!(bundle.contains("default: \"..\""), "{bundle}");
+    assert!(job.contains("default: \".\""), "{job}");
+    let bundle = std::fs::read_to_string(p.join("w/template.yaml")).unwrap();
+    assert_eq!(bundle, job, "the folder is a Deadline Cloud job bundle too");
     let manifest = std::fs::read_to_string(p.join("w/wedge.json")).unwrap();
     assert!(
         manifest.contains("\"label\": \"seed=2 speed=0.8\""),

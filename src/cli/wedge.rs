@@ -75,7 +75,7 @@ pub fn run(a: WedgeArgs) -> Result<()> {
             eprintln!("  {}  {}", v.shot().display(), v.label);
         }
         eprintln!(
-            "  job.yaml (openjd run {0}/job.yaml), bundle/ (deadline bundle submit {0}/bundle)",
+            "  job.yaml (openjd run {0}/job.yaml); {0} is a Deadline Cloud job bundle too (deadline bundle submit {0})",
             a.out.display()
         );
     }

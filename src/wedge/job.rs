@@ -36,7 +36,7 @@ pub fn template(spec: &JobSpec) -> String {
     format!(
         r#"# Open Job Description job template written by `beeswarm wedge` (see docs/farm.md).
 # Run it locally:      openjd run job.yaml
-# On Deadline Cloud:   deadline bundle submit bundle/
+# On Deadline Cloud:   deadline bundle submit .   (this folder is the job bundle)
 specificationVersion: jobtemplate-2023-09
 name: {job_name}
 description: {description}

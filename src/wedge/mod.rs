@@ -7,7 +7,8 @@
 //! DIR/variants/<name>_<k>.toml   variant k's shot (k = 1, 2, …), checked, standing alone
 //! DIR/presets/                   preset files the variants use, copied
 //! DIR/job.yaml                   the Open Job Description job (see `job`)
-//! DIR/bundle/                    the same job as an AWS Deadline Cloud job bundle
+//! DIR/template.yaml              the same, by the name an AWS Deadline Cloud job bundle
+//!                                uses: DIR is also a bundle (deadline bundle submit DIR)
 //! DIR/caches/<name>_<k>/         variant k's caches and preview, once baked
 //! DIR/<name>.contact.png         the contact sheet, once gathered
 //! ```
@@ -155,15 +156,12 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
         beeswarm: spec.beeswarm,
         checkpoint_every: spec.checkpoint_every,
     };
-    write_file(
-        &dir.join("job.yaml"),
-        job::template(&spec_for(".")).as_bytes(),
-    )?;
-    create_dir(&dir.join("bundle"))?;
-    write_file(
-        &dir.join("bundle/template.yaml"),
-        job::template(&spec_for("..")).as_bytes(),
-    )?;
+    // The wedge folder is also a Deadline Cloud job bundle, which names its template
+    // template.yaml; OpenJD refuses a default path outside the template's folder, so the
+    // bundle is the wedge folder itself.
+    let template = job::template(&spec_for("."));
+    write_file(&dir.join("job.yaml"), template.as_bytes())?;
+    write_file(&dir.join("template.yaml"), template.as_bytes())?;
     Ok(manifest)
 }
 
