@@ -192,3 +192,64 @@ fn run_bakes_every_variant_like_a_plain_bake_and_gathers_a_contact_sheet() {
         std::fs::read(p.join("w/small.contact.png")).unwrap()
     );
 }
+
+#[test]
+fn with_a_reference_the_gather_step_ranks_the_variants() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    // The shot writes glb only: a ranked wedge adds CSV to its variants.
+    std::fs::write(p.join("small.toml"), SHOT.replace("[\"csv\"]", "[\"glb\"]")).unwrap();
+    // The "recording": the same shot baked with a seed of its own.
+    let out = beeswarm(
+        p,
+        &[
+            "bake",
+            "small.toml",
+            "--seed",
+            "100",
+            "--format",
+            "csv",
+            "--out",
+            "rec",
+            "--quiet",
+        ],
+    );
+    assert!(out.status.success());
+    let out = beeswarm(
+        p,
+        &[
+            "wedge",
+            "small.toml",
+            "--vary",
+            "swarm.bees.params.speed=0.3,1.0,3.0",
+            "--reference",
+            "rec/small.tracks.csv",
+            "--out",
+            "w",
+            "--run",
+            "--quiet",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v1 = std::fs::read_to_string(p.join("w/variants/small_1.toml")).unwrap();
+    assert!(v1.contains("formats = [\"glb\", \"csv\"]"), "{v1}");
+    assert!(p.join("w/reference.csv").exists());
+    assert!(p.join("w/small.eval.json").exists());
+    let md = std::fs::read_to_string(p.join("w/small.eval.md")).unwrap();
+    let rows: Vec<Vec<&str>> = md
+        .lines()
+        .filter(|l| l.starts_with("| 1 |") || l.starts_with("| 2 |") || l.starts_with("| 3 |"))
+        .take(3)
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 3, "{md}");
+    let fitness: Vec<f64> = rows.iter().map(|r| r[4].parse().unwrap()).collect();
+    assert!(fitness[0] >= fitness[1] && fitness[1] >= fitness[2], "{md}");
+    // The variant flying at the recording's own speed (1.0, the preset's) ranks first.
+    assert_eq!(rows[0][3], "speed=1.0", "{md}");
+    assert!(md.contains("## Per metric (eval)"), "{md}");
+}

@@ -31,6 +31,10 @@ pub struct WedgeArgs {
     /// most this many frames (0: no checkpoints).
     #[arg(long, default_value_t = 24, value_name = "N")]
     pub checkpoint_every: u32,
+    /// A recording (tracks CSV, as `beeswarm eval --reference`): the gather step ranks
+    /// the variants against it (<out>/<shot>.eval.md); the variants also write CSV.
+    #[arg(long, value_name = "REAL")]
+    pub reference: Option<PathBuf>,
     /// Also bake every variant here and gather the contact sheet (no farm needed).
     #[arg(long)]
     pub run: bool,
@@ -43,7 +47,9 @@ pub struct WedgeArgs {
 }
 
 #[derive(Args, Debug)]
-#[command(about = "Gather a baked wedge: the contact sheet of every variant's preview")]
+#[command(
+    about = "Gather a baked wedge: the contact sheet of every variant's preview, and with a reference the ranking"
+)]
 pub struct GatherArgs {
     /// The wedge folder (written by beeswarm wedge).
     pub dir: PathBuf,
@@ -63,6 +69,7 @@ pub fn run(a: WedgeArgs) -> Result<()> {
         out: &a.out,
         beeswarm: &beeswarm,
         checkpoint_every: a.checkpoint_every,
+        reference: a.reference.as_deref(),
     })?;
     if !a.quiet {
         eprintln!(
@@ -83,16 +90,19 @@ pub fn run(a: WedgeArgs) -> Result<()> {
         let _ = ctrlc::set_handler(|| {
             crate::atomic::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed)
         });
-        let sheet = wedge::runner::run(&a.out, &manifest, a.jobs, a.checkpoint_every, a.quiet)?;
+        let written = wedge::runner::run(&a.out, &manifest, a.jobs, a.checkpoint_every, a.quiet)?;
         if !a.quiet {
-            eprintln!("wrote {}", sheet.display());
+            for p in written {
+                eprintln!("wrote {}", p.display());
+            }
         }
     }
     Ok(())
 }
 
 pub fn gather(a: GatherArgs) -> Result<()> {
-    let sheet = wedge::gather(&a.dir)?;
-    eprintln!("wrote {}", sheet.display());
+    for p in wedge::gather(&a.dir)? {
+        eprintln!("wrote {}", p.display());
+    }
     Ok(())
 }

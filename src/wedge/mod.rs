@@ -11,6 +11,8 @@
 //!                                uses: DIR is also a bundle (deadline bundle submit DIR)
 //! DIR/caches/<name>_<k>/         variant k's caches and preview, once baked
 //! DIR/<name>.contact.png         the contact sheet, once gathered
+//! DIR/reference.csv              with --reference: the recording the variants are ranked
+//! DIR/<name>.eval.md, .eval.json   against, and the ranking, once gathered
 //! ```
 //!
 //! Every variant is resolved and checked before anything is written, so a bad variant
@@ -18,6 +20,7 @@
 
 pub mod contact_sheet;
 pub mod job;
+pub mod ranking;
 pub mod runner;
 pub mod variant_shot;
 pub mod vary;
@@ -31,6 +34,8 @@ pub use vary::{Variant, Vary};
 
 /// The name of a wedge folder's manifest.
 pub const MANIFEST: &str = "wedge.json";
+/// The recording copied into a wedge folder (so the folder is all a farm needs).
+pub const REFERENCE: &str = "reference.csv";
 
 /// `DIR/wedge.json`: what `gather` and the runner read back.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -40,6 +45,9 @@ pub struct Manifest {
     /// The wedged shot file, as given.
     pub shot: String,
     pub variants: Vec<ManifestVariant>,
+    /// The recording the variants are ranked against, relative to the wedge folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -77,6 +85,8 @@ pub struct WedgeSpec<'a> {
     pub beeswarm: &'a str,
     /// Frames between a task's checkpoints (0: none).
     pub checkpoint_every: u32,
+    /// A recording (tracks CSV) to rank the variants against in the gather step.
+    pub reference: Option<&'a Path>,
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
@@ -93,6 +103,15 @@ fn create_dir(dir: &Path) -> Result<()> {
 /// Checks every variant, then writes the wedge folder; returns its manifest.
 pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
     let shot = crate::shot::load(spec.shot)?;
+    if let Some(r) = spec.reference {
+        // Read now: a bad recording fails the wedge before any bake.
+        crate::eval::tracks::read(r)?;
+    }
+    // Ranking needs every variant's tracks: CSV joins the shot's formats.
+    let mut formats = shot.output.formats.clone();
+    if spec.reference.is_some() && !formats.contains(&crate::shot::Format::Csv) {
+        formats.push(crate::shot::Format::Csv);
+    }
     // Read again as text: variants are the shot's own text with keys set.
     let src = String::from_utf8(
         crate::shot::read_bounded(spec.shot).map_err(|e| Error::io(spec.shot, e))?,
@@ -110,7 +129,8 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
         let index = k + 1;
         let name = format!("{}_{index}", shot.name);
         let varied = variant_shot::varied_text(&src, spec.shot, index, v)?;
-        let text = variant_shot::standalone_text(&varied, &shot_dir, &name, &mut presets)?;
+        let text =
+            variant_shot::standalone_text(&varied, &shot_dir, &name, &formats, &mut presets)?;
         texts.push(text);
         entries.push(ManifestVariant {
             index,
@@ -142,10 +162,19 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
     for (text, e) in texts.iter().zip(&entries) {
         write_file(&dir.join(e.shot()), text.as_bytes())?;
     }
+    let reference = match spec.reference {
+        Some(r) => {
+            let bytes = std::fs::read(r).map_err(|e| Error::io(r, e))?;
+            write_file(&dir.join(REFERENCE), &bytes)?;
+            Some(REFERENCE.to_owned())
+        }
+        None => None,
+    };
     let manifest = Manifest {
         name: shot.name.clone(),
         shot: spec.shot.display().to_string(),
         variants: entries,
+        reference,
     };
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest serialises");
     write_file(&dir.join(MANIFEST), format!("{json}\n").as_bytes())?;
@@ -178,8 +207,9 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
         .map_err(|e| Error::input(format!("{}: not a wedge manifest: {e}", path.display())))
 }
 
-/// The gather step: the contact sheet of every variant's preview, `DIR/<name>.contact.png`.
-pub fn gather(dir: &Path) -> Result<PathBuf> {
+/// The gather step: the contact sheet of every variant's preview, `DIR/<name>.contact.png`,
+/// and with a reference recording the ranking, `DIR/<name>.eval.md` (and `.eval.json`).
+pub fn gather(dir: &Path) -> Result<Vec<PathBuf>> {
     let manifest = read_manifest(dir)?;
     let cells: Vec<(String, PathBuf)> = manifest
         .variants
@@ -192,5 +222,9 @@ pub fn gather(dir: &Path) -> Result<PathBuf> {
         manifest.variants.len()
     );
     let sheet = contact_sheet::render(&title, &cells)?;
-    sheet.save_png(&dir.join(format!("{}.contact.png", manifest.name)))
+    let mut written = vec![sheet.save_png(&dir.join(format!("{}.contact.png", manifest.name)))?];
+    if let Some(reference) = &manifest.reference {
+        written.extend(ranking::write(dir, &manifest, &dir.join(reference))?);
+    }
+    Ok(written)
 }

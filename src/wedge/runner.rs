@@ -43,7 +43,7 @@ pub fn bake_command(
 }
 
 /// Bakes every variant of the wedge in `dir`, `parallel` at a time, reporting each as it
-/// ends; then writes the contact sheet. A failed variant fails the run (after the others
+/// ends; then gathers (the contact sheet, and the ranking with a reference). A failed variant fails the run (after the others
 /// finish), naming it.
 pub fn run(
     dir: &Path,
@@ -51,7 +51,7 @@ pub fn run(
     jobs: usize,
     checkpoint_every: u32,
     quiet: bool,
-) -> Result<PathBuf> {
+) -> Result<Vec<PathBuf>> {
     let exe = std::env::current_exe()
         .map_err(|e| Error::bake(format!("cannot find the beeswarm program: {e}")))?;
     let (parallel, threads) = plan(jobs, manifest.variants.len());

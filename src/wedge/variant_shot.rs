@@ -168,12 +168,13 @@ impl CopiedPresets {
 }
 
 /// Rewrites a checked variant so it stands alone as `variants/<variant_name>.toml` of the
-/// wedge: its scene name, its output folder `../caches/<variant_name>`, a preview, and
-/// preset files as `../presets/<file>` (recorded in `presets` for copying).
+/// wedge: its scene name, its output folder `../caches/<variant_name>`, `formats`, a
+/// preview, and preset files as `../presets/<file>` (recorded in `presets` for copying).
 pub fn standalone_text(
     text: &str,
     shot_dir: &Path,
     variant_name: &str,
+    formats: &[crate::shot::Format],
     presets: &mut CopiedPresets,
 ) -> Result<String> {
     let mut doc: DocumentMut = text.parse().map_err(|e| Error::bake(format!("{e}")))?;
@@ -186,6 +187,8 @@ pub fn standalone_text(
     )
     .map_err(internal)?;
     set(&mut doc, "output.preview", Value::from(true)).map_err(internal)?;
+    let names: toml_edit::Array = formats.iter().map(|f| f.name()).collect();
+    set(&mut doc, "output.formats", Value::Array(names)).map_err(internal)?;
     if let Some(swarms) = doc.get_mut("swarm").and_then(Item::as_array_of_tables_mut) {
         for t in swarms.iter_mut() {
             let Some(preset) = t.get("preset").and_then(Item::as_str) else {
