@@ -401,6 +401,10 @@ count = 40
 name = "flies"
 model = "boids"
 count = 25
+[[swarm]]
+name = "drift"
+model = "brownian"
+count = 10
 "#;
 
     /// A simulation restored from the state of another at frame 5 steps and records

@@ -6,7 +6,8 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-/// Two models (a bee swarm with its channels, a boids flock), an obstacle and a target.
+/// Three models (a bee swarm with its channels, a boids flock, Brownian flyers whose
+/// random kicks depend on the step count), an obstacle and a target.
 const SHOT: &str = r#"
 [scene]
 name = "resume"
@@ -22,6 +23,11 @@ name = "flock"
 model = "boids"
 count = 60
 spawn = { shape = "sphere", center = [0.0, 2.0, 0.0], radius = 0.8 }
+[[swarm]]
+name = "drift"
+model = "brownian"
+count = 30
+spawn = { shape = "box", center = [1.0, 1.0, 0.0], size = [1.0, 1.0, 1.0] }
 [[obstacle]]
 type = "plane"
 name = "ground"
