@@ -101,7 +101,11 @@ def _draw_shot(context, layout, s, path):
     layout.prop(s, "targets")
     layout.prop(s, "ground")
     layout.prop(s, "wind")
-    layout.prop(s, "wing_flap_hz")
+    layout.prop(s, "wings")
+    if s.wings == "FLAP":
+        layout.prop(s, "wing_flap_hz")
+    if "GLTF" in s.formats:
+        layout.prop(s, "gltf_layout")
 
 def _draw_swarm(context, box, sw, path):
     col = box.column(align=True)

@@ -82,6 +82,21 @@ def _display_changed(self, context):
     display.apply(self.id_data)
 
 
+WINGS = [
+    ("BLUR", "Blur", "A faint fan of wings over the whole stroke, static: what a camera sees of "
+                     "a real 230 Hz beat"),
+    ("STILL", "Still", "Wings held at mid-stroke, a clear membrane"),
+    ("FLAP", "Flap", "A stylised flap at Wing Flap Hz, in 8 phase groups so the swarm does not "
+                     "beat in lockstep"),
+]
+GLTF_LAYOUTS = [
+    ("AGENT", "One Object per Bee", "One animated object per bee holding its pose (flapping "
+                                    "wings add two): Blender imports it several times faster"),
+    ("PARTS", "Path, Body, Wings", "Per bee a path object, a body object and wing objects "
+                                   "(2–4 animated objects per bee), for animators who edit them"),
+]
+
+
 class BeeswarmPreferences(bpy.types.AddonPreferences):
     bl_idname = __package__
 
@@ -189,10 +204,16 @@ class BeeswarmSettings(bpy.types.PropertyGroup):
     ground: BoolProperty(name="Ground Plane", default=False,
                          description="Add a ground plane at Z = 0")
     wind: FloatVectorProperty(name="Wind", subtype="VELOCITY", size=3, default=(0.0, 0.0, 0.0))
+    wings: EnumProperty(
+        name="Wings", items=WINGS, default="BLUR",
+        description="How the wings are drawn, the same in glTF and USD")
     wing_flap_hz: FloatProperty(
         name="Wing Flap", default=0.0, min=0.0, soft_max=12.0, unit="NONE",
-        description="glTF: visible wing flap in Hz; 0 = wings still at mid-stroke with a more "
-                    "transparent membrane (what a camera sees of a 230 Hz beat)")
+        description="Flap rate of Wings = Flap, Hz (the real 230 Hz beat would alias); 0 = the "
+                    "default, 6 Hz or a sixth of the frame rate if less")
+    gltf_layout: EnumProperty(
+        name="glTF Layout", items=GLTF_LAYOUTS, default="AGENT",
+        description="How each bee is laid out in a glTF cache")
     formats: EnumProperty(name="Formats", items=FORMATS, options={"ENUM_FLAG"}, default={"USD"},
                           description="Caches to bake (the tracks CSV always comes too)")
     format: EnumProperty(name="Import", items=FORMATS, default="USD",

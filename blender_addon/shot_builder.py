@@ -422,11 +422,13 @@ def build_shot(scene, settings, name=None):
         shot["target"] = targets
     if any(abs(x) > 0 for x in settings.wind):
         shot["wind"] = {"velocity": to_shot(settings.wind)}
-    if settings.wing_flap_hz > 0:
+    shot["output"] = {"wings": settings.wings.lower(),
+                      "gltf_layout": settings.gltf_layout.lower()}
+    if settings.wings == "FLAP" and settings.wing_flap_hz > 0:
         if settings.wing_flap_hz > fps / 2:
             raise ShotBuildError(f"Wing Flap {settings.wing_flap_hz:g} Hz is above half the "
                                  f"frame rate ({fps / 2:g} Hz) and would alias")
-        shot["output"] = {"wing_flap_hz": float(settings.wing_flap_hz)}
+        shot["output"]["wing_flap_hz"] = float(settings.wing_flap_hz)
     return shot, warnings
 
 

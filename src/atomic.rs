@@ -9,6 +9,10 @@
 /// step (copying gigabytes into one USDA layer) can stop on it too.
 pub static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
+/// The error of a bake stopped by [`INTERRUPTED`].
+pub const INTERRUPTED_MESSAGE: &str =
+    "interrupted: no cache was written; the previous cache is untouched";
+
 /// Whether [`INTERRUPTED`] is set.
 pub fn interrupted() -> bool {
     INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed)
@@ -101,6 +105,11 @@ impl SealedFile {
         &self.dest
     }
 
+    /// Where the complete file is until it is committed.
+    pub fn temp_path(&self) -> &Path {
+        &self.tmp
+    }
+
     /// Files to delete once this one is in place (e.g. value clips a new cache no longer
     /// uses); their folders go too when that leaves them empty.
     pub fn remove_after_commit(mut self, paths: Vec<PathBuf>) -> Self {
@@ -128,13 +137,20 @@ impl SealedFile {
 /// Renames sealed files into place in order; returns their final paths. A destination
 /// that cannot be replaced (a folder stands there) is found before anything is renamed.
 pub fn commit_all(files: Vec<SealedFile>) -> Result<Vec<PathBuf>> {
-    if let Some(f) = files.iter().find(|f| f.dest.is_dir()) {
-        return Err(Error::bake(format!(
+    check_destinations(&files)?;
+    files.into_iter().map(SealedFile::commit).collect()
+}
+
+/// Refuses sealed files whose destination cannot be replaced (a folder stands there),
+/// so that a set is refused before any of its files is renamed.
+pub fn check_destinations(files: &[SealedFile]) -> Result<()> {
+    match files.iter().find(|f| f.dest.is_dir()) {
+        Some(f) => Err(Error::bake(format!(
             "cannot write {}: a folder stands there",
             f.dest.display()
-        )));
+        ))),
+        None => Ok(()),
     }
-    files.into_iter().map(SealedFile::commit).collect()
 }
 
 impl Drop for SealedFile {

@@ -9,9 +9,8 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 pub use crate::atomic::INTERRUPTED;
-
-const INTERRUPTED_MESSAGE: &str =
-    "interrupted: no cache was written; the previous cache is untouched";
+use crate::atomic::INTERRUPTED_MESSAGE;
+use crate::cache_set::{SetInfo, pause_point, pausing};
 
 /// Progress of a bake, reported after every frame.
 #[derive(Clone, Copy, Debug)]
@@ -41,8 +40,6 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
             dir.display()
         ))
     })?;
-    // What bakes killed outright (kill -9, out of memory) left here goes first.
-    crate::atomic::remove_stale_temporaries(dir);
     crate::atomic::probe_writable(dir).map_err(|e| {
         Error::input(format!(
             "the output folder {} is not writable: {e}",
@@ -89,12 +86,14 @@ enum Message {
     Done,
 }
 
-/// Bakes `shot` into the requested caches; returns the written paths.
+/// Bakes `shot` into the requested caches; returns the written paths (the cache set's
+/// files, then its manifest).
 ///
 /// The simulation and the writers run concurrently: frames go to a writer thread through a
 /// channel that holds at most two frames, so memory stays bounded while formatting one
-/// frame overlaps simulating the next. Writers complete (rename into place) only after the
-/// last frame; an error or an interrupt drops them, which removes their temporary files.
+/// frame overlaps simulating the next. Writers complete only after the last frame, and
+/// their files replace the previous set as one (`crate::cache_set`); an error or an
+/// interrupt before that drops them, which removes their temporary files.
 pub fn bake(
     shot: &Shot,
     opts: &BakeOptions,
@@ -112,6 +111,8 @@ pub fn bake_resumable(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
+    // What bakes killed outright (kill -9, out of memory) left here goes first.
+    crate::cache_set::remove_stale_temporaries(opts.out_dir, &shot.name);
     let start = Instant::now();
     let mut sim = Simulation::new(shot);
     sim.set_cancel(&INTERRUPTED);
@@ -123,6 +124,8 @@ pub fn bake_resumable(
         None => (None, None),
     };
     let meta = sim.meta();
+    let info = SetInfo::of(shot);
+    let out_dir = opts.out_dir;
     let mut writers: Vec<Box<dyn CacheWriter>> = Vec::new();
     for &f in opts.formats {
         writers.push(export::open_writer(
@@ -156,21 +159,24 @@ pub fn bake_resumable(
                         }
                     }
                     Message::Done => {
-                        // Seal every file of every format, then rename them all. An
+                        // Seal every file of every format, then replace the set. An
                         // interrupt while sealing (which can take seconds) drops the
                         // sealed files; the renames themselves take milliseconds and,
                         // once begun, complete, so the set is never left half replaced.
                         let mut sealed = Vec::new();
-                        for w in writers {
+                        for (k, w) in writers.into_iter().enumerate() {
                             if INTERRUPTED.load(Ordering::Relaxed) {
                                 return Err(Error::bake(INTERRUPTED_MESSAGE));
                             }
                             sealed.extend(w.finish()?);
+                            pause_point(&format!("sealed {}", k + 1));
                         }
                         if INTERRUPTED.load(Ordering::Relaxed) {
                             return Err(Error::bake(INTERRUPTED_MESSAGE));
                         }
-                        return crate::atomic::commit_all(sealed);
+                        let mut written = crate::cache_set::commit(out_dir, &info, sealed)?;
+                        written.push(crate::cache_set::manifest_path(out_dir, &info.shot_name));
+                        return Ok(written);
                     }
                 }
             }
@@ -214,6 +220,9 @@ pub fn bake_resumable(
                     frame,
                     elapsed_s: start.elapsed().as_secs_f64(),
                 });
+                if pausing() {
+                    pause_point(&format!("frame {done}"));
+                }
             }
             let _ = tx.send(Message::Done);
             Ok(())

@@ -405,6 +405,10 @@ count = 25
 name = "drift"
 model = "brownian"
 count = 10
+[[swarm]]
+name = "midges"
+model = "field"
+count = 15
 "#;
 
     /// A simulation restored from the state of another at frame 5 steps and records

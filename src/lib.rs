@@ -10,6 +10,7 @@
 
 pub mod atomic;
 pub mod bake;
+pub mod cache_set;
 pub mod checkpoint;
 pub mod cli;
 pub mod error;

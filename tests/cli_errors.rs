@@ -2,7 +2,9 @@
 //! the file, line, column and key and says what was expected; exit code 2 for a bad shot
 //! or argument, 1 for a failure while baking; never a panic; never an output file.
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::files_under;
+use std::path::Path;
 use std::process::Command;
 use tempfile::TempDir;
 
@@ -35,27 +37,10 @@ fn beeswarm(dir: &Path, args: &[&str]) -> Run {
     run
 }
 
-/// Every file under `dir` (recursively), relative to it, sorted.
-fn files_under(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push(p.strip_prefix(dir).unwrap().to_path_buf());
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
-/// Asserts that the folder holds exactly `expected` files (the inputs): nothing was written.
+/// Asserts that the folder holds exactly `expected` files (the inputs, or the inputs and
+/// a bake's set): nothing else was written.
 fn assert_only(dir: &Path, expected: &[&str]) {
-    let mut want: Vec<PathBuf> = expected.iter().map(PathBuf::from).collect();
+    let mut want: Vec<String> = expected.iter().map(|f| f.to_string()).collect();
     want.sort();
     assert_eq!(files_under(dir), want, "no output file may appear");
 }
@@ -119,7 +104,10 @@ fn a_valid_shot_bakes_with_exit_0_and_writes_the_tracks() {
         &["bake", "shot.toml", "--out", "out", "--format", "csv"],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
-    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    assert_only(
+        dir.path(),
+        &["shot.toml", "out/shot.tracks.csv", "out/shot.beeswarm.json"],
+    );
     let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3);
 }
@@ -735,7 +723,10 @@ fn good_arguments_are_accepted() {
     // Repeated and mixed-case formats, negative frames: exit 0 and exactly the CSV.
     let (run, dir) = bake_with(&["--format", "CSV,csv", "--frames", "-2:1"]);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    assert_only(dir.path(), &["shot.toml", "out/shot.tracks.csv"]);
+    assert_only(
+        dir.path(),
+        &["shot.toml", "out/shot.tracks.csv", "out/shot.beeswarm.json"],
+    );
     let csv = std::fs::read_to_string(dir.path().join("out/shot.tracks.csv")).unwrap();
     let frames: Vec<&str> = csv
         .lines()
@@ -764,7 +755,7 @@ fn bad_bench_options_name_the_option() {
         ),
         (
             &["--model", "wasp"][..],
-            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", found \"wasp\"",
+            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\", found \"wasp\"",
         ),
         (
             &["--model", "boids", "--preset", "nest"][..],
@@ -909,7 +900,7 @@ fn parameters_and_presets_are_checked_against_the_swarms_model() {
         &err,
         &[
             "key `swarm[0].model`",
-            "expected one of \"bee\", \"curl\", \"brownian\", \"boids\"",
+            "expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\"",
         ],
     );
     // A preset file written for another model.

@@ -29,7 +29,21 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
     let doc: serde_json::Value = serde_json::from_str(&beeswarm::cli::models::json()).unwrap();
     let models = doc["models"].as_array().unwrap();
     let model = |name: &str| models.iter().find(|m| m["name"] == name).unwrap();
-    assert_eq!(names(&doc, "models"), ["bee", "curl", "brownian", "boids"]);
+    assert_eq!(
+        names(&doc, "models"),
+        ["bee", "curl", "brownian", "boids", "field"]
+    );
+    assert_eq!(names(model("field"), "channels"), ["speed", "cost", "mde"]);
+    assert_eq!(
+        names(model("field"), "presets"),
+        [
+            "two_blocks",
+            "chasing",
+            "aggregation",
+            "phototaxis",
+            "locusts"
+        ]
+    );
     let bee = model("bee");
     let params = names(bee, "params");
     assert!(

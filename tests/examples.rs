@@ -109,14 +109,34 @@ fn every_example_bakes_to_complete_finite_tracks() {
         assert_eq!(code, 0, "beeswarm bake {file}:\n{stderr}");
 
         let csv_path = dir.join(format!("{}.tracks.csv", shot.name));
-        let written: Vec<PathBuf> = std::fs::read_dir(&dir)
+        let mut written: Vec<PathBuf> = std::fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().path())
             .collect();
-        assert_eq!(written, vec![csv_path.clone()], "{file}: only the tracks");
+        written.sort();
+        let manifest = dir.join(format!("{}.beeswarm.json", shot.name));
+        assert_eq!(
+            written,
+            vec![manifest, csv_path.clone()],
+            "{file}: only the tracks and the set's manifest"
+        );
         let csv = std::fs::read_to_string(&csv_path).unwrap();
         let mut lines = csv.lines();
-        assert_eq!(lines.next(), Some(HEADER), "{file}");
+        // The pose columns, then one per channel of the shot's models (the bee model's
+        // pitch, roll, sway; the field model's speed, cost, mde).
+        let header = lines.next().unwrap_or_default();
+        let pose: Vec<&str> = HEADER.split(',').take(13).collect();
+        let columns: Vec<&str> = header.split(',').collect();
+        assert_eq!(columns[..13], pose[..], "{file}");
+        let expected: Vec<&str> = shot
+            .swarms
+            .iter()
+            .flat_map(|s| s.model.info().channels.iter().map(|c| c.name))
+            .collect();
+        assert!(
+            expected.iter().all(|c| columns[13..].contains(c)),
+            "{file}: {header}"
+        );
         let mut rows = 0;
         let mut seen = vec![0usize; bees];
         for line in lines {
@@ -132,7 +152,7 @@ fn every_example_bakes_to_complete_finite_tracks() {
                         .unwrap_or_else(|_| panic!("{file}: not a number {x:?} in {line}")),
                 })
                 .collect();
-            assert_eq!(v.len(), 16, "{file}: {line}");
+            assert_eq!(v.len(), columns.len(), "{file}: {line}");
             assert!(v.iter().all(|x| x.is_finite()), "{file}: {line}");
             let (id, frame, time) = (v[0] as usize, v[1] as i32, v[2]);
             assert!(id < bees, "{file}: id {id}");

@@ -56,6 +56,8 @@ fn obstacle(rng: &mut Rng) -> String {
 fn scene(case: u64) -> String {
     let mut rng = Rng::new(2026, case, 0);
     let model = ["bee", "brownian", "boids", "curl"][(rng.f32() * 4.0) as usize % 4];
+    // Cases from 200 on fly paper 001's field model, towards a goal across the scene.
+    let model = if case >= 200 { "field" } else { model };
     // Speeds up to the documented 50 m/s, the noise lattice down to its 1 mm minimum.
     let speed = if rng.f32() < 0.5 {
         rng.range(0.5, 3.0)
@@ -71,6 +73,13 @@ fn scene(case: u64) -> String {
             "{{ speed = {speed:.2}, noise_cell = {:.4} }}",
             rng.range(0.001, 0.2)
         ),
+        "field" => {
+            let scale = rng.range(0.001, 0.2);
+            format!(
+                "{{ s0 = {speed:.2}, scale = {scale:.4}, gain = {:.4}, goal_radius = 0.2 }}",
+                speed * scale
+            )
+        }
         _ => format!("{{ speed = {speed:.2} }}"),
     };
     let mut src = format!(
@@ -80,6 +89,9 @@ fn scene(case: u64) -> String {
     for _ in 0..1 + (rng.f32() * 5.0) as usize {
         src += &format!("[[obstacle]]\n{}\n", obstacle(&mut rng));
     }
+    if model == "field" {
+        src += "[[target]]\nposition = [0.9, 1.2, -0.9]\n";
+    }
     src
 }
 
@@ -87,7 +99,7 @@ fn scene(case: u64) -> String {
 fn no_body_is_ever_inside_an_obstacle() {
     let mut checked = 0usize;
     let mut worst = f32::INFINITY;
-    for case in 0..200 {
+    for case in 0..240 {
         let src = scene(case);
         // A scene whose spawn box lies wholly inside obstacles is refused, as documented.
         let Ok(shot) = beeswarm::shot::parse(

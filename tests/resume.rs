@@ -6,8 +6,9 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-/// Three models (a bee swarm with its channels, a boids flock, Brownian flyers whose
-/// random kicks depend on the step count), an obstacle and a target.
+/// Four models (a bee swarm with its channels, a boids flock, Brownian flyers whose
+/// random kicks depend on the step count, paper 001's field insects), an obstacle and a
+/// target.
 const SHOT: &str = r#"
 [scene]
 name = "resume"
@@ -28,6 +29,11 @@ name = "drift"
 model = "brownian"
 count = 30
 spawn = { shape = "box", center = [1.0, 1.0, 0.0], size = [1.0, 1.0, 1.0] }
+[[swarm]]
+name = "midges"
+model = "field"
+count = 30
+spawn = { shape = "box", center = [-1.0, 1.0, 0.0], size = [1.0, 1.0, 1.0] }
 [[obstacle]]
 type = "plane"
 name = "ground"
@@ -107,6 +113,7 @@ fn a_killed_bake_resumes_into_byte_identical_caches() {
     assert_eq!(
         expected,
         [
+            "resume.beeswarm.json",
             "resume.glb",
             "resume.preview.png",
             "resume.tracks.csv",

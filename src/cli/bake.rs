@@ -49,6 +49,10 @@ pub struct BakeArgs {
     /// caches are byte-identical to an uninterrupted bake's. Without one, bake afresh.
     #[arg(long)]
     pub resume: bool,
+    /// Bake a shot over the limits (memory above what is available, disk above what is
+    /// free, more than 10⁹ neighbour pairs at spawn), which is refused otherwise.
+    #[arg(long)]
+    pub allow_large: bool,
 }
 
 /// A shot with the command line's overrides applied, and where and what it bakes: what
@@ -62,7 +66,8 @@ pub struct Plan {
 
 impl BakeArgs {
     /// The plan these options make of `shot`, refused (exit 2) where a bake could not
-    /// start: too many threads, an output folder that cannot be made.
+    /// start (too many threads, an output folder that cannot be made) or, without
+    /// `--allow-large`, is over a limit (`resources::over_limit`).
     pub fn plan(&self, mut shot: crate::shot::Shot) -> Result<Plan> {
         if let Some(seed) = self.seed {
             shot.seed = seed;
@@ -87,12 +92,14 @@ impl BakeArgs {
             unique
         };
         let preview = self.preview || shot.output.preview;
-        Ok(Plan {
+        let plan = Plan {
             shot,
             out_dir,
             formats,
             preview,
-        })
+        };
+        super::resources::refuse_over_limits(&plan, self.shot.as_deref(), self.allow_large)?;
+        Ok(plan)
     }
 }
 
@@ -101,12 +108,14 @@ pub fn run(a: BakeArgs) -> Result<()> {
         Some(p) => crate::shot::load(p)?,
         None => crate::shot::embedded_default(),
     };
+    let plan = a.plan(shot)?;
+    super::resources::reserve_memory(&plan, a.shot.as_deref())?;
     let Plan {
         shot,
         out_dir,
         formats,
         preview,
-    } = a.plan(shot)?;
+    } = plan;
     let opts = BakeOptions {
         out_dir: &out_dir,
         formats: &formats,
@@ -114,6 +123,12 @@ pub fn run(a: BakeArgs) -> Result<()> {
         threads: a.threads,
     };
 
+    if !a.quiet
+        && let Some(problem) =
+            crate::cache_set::read(&out_dir, &shot.name).problem(&out_dir, &shot.name)
+    {
+        eprintln!("note: {problem}");
+    }
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
     let mut reporter = Reporter::new(a.progress, shot.frame_count(), a.quiet);
     let started = std::time::Instant::now();

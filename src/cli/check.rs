@@ -1,9 +1,10 @@
 //! `beeswarm check`: validate a shot and say what a bake would produce.
 
+use super::resources::{Needs, bytes, density};
 use crate::error::Result;
-use crate::export::Format;
 use crate::shot::{Region, Shape, Shot, Swarm};
 use clap::Args;
+use std::path::Path;
 
 #[derive(Args, Debug)]
 #[command(
@@ -23,70 +24,22 @@ pub fn run(a: CheckArgs) -> Result<()> {
     };
     // Whatever would stop a bake before it starts stops the check too.
     let plan = a.bake.plan(shot)?;
+    super::resources::reserve_memory(&plan, a.bake.shot.as_deref())?;
     let mut text = summary(&plan.shot);
     text += &dry_run(&plan);
     crate::progress::stdout(&text);
     Ok(())
 }
 
-/// Bytes per bee and frame of each cache, measured on `examples/grassland.toml` (1,000
-/// bees of the bee model, 240 frames): glTF 62 (plus 1.4 kB of JSON per bee), USDA the
-/// writer's own estimate, CSV 163. Models without channels write a little less.
-const GLTF_BYTES: f64 = 62.0;
-const GLTF_JSON_PER_BEE: f64 = 1400.0;
-const USDA_BYTES: f64 = crate::export::usda::BYTES_PER_INSTANCE_FRAME as f64;
-const CSV_BYTES: f64 = 163.0;
-
 /// What a bake of the plan would write and replace, and the time, memory and disk it
 /// would take (estimates; the time from a short run of a smaller copy of the shot).
 fn dry_run(plan: &super::bake::Plan) -> String {
     use std::fmt::Write;
     let shot = &plan.shot;
-    let (bees, frames) = (shot.bee_count() as f64, shot.frame_count() as f64);
-    let bee_frames = bees * frames;
+    let needs = Needs::of(plan);
     let mut s = String::new();
-    let mut files: Vec<(String, f64)> = Vec::new();
-    let mut scratch = 0.0;
-    for f in &plan.formats {
-        let name = f.file_name(&shot.name);
-        match f {
-            Format::Glb => {
-                files.push((name, bee_frames * GLTF_BYTES + bees * GLTF_JSON_PER_BEE));
-                scratch += bee_frames * 52.0;
-            }
-            Format::Gltf => {
-                files.push((name, bees * GLTF_JSON_PER_BEE));
-                files.push((format!("{}.bin", shot.name), bee_frames * GLTF_BYTES));
-                scratch += bee_frames * 52.0;
-            }
-            Format::Usda => {
-                let size = bee_frames * USDA_BYTES;
-                let clip = shot.output.options.usda_clip_frames.unwrap_or_else(|| {
-                    crate::export::usda::clip_frames_for(bees as u64, frames as u64)
-                });
-                if clip > 0 {
-                    let clips = (frames / clip as f64).ceil();
-                    files.push((
-                        format!(
-                            "{name} + {}.clips/ ({clips} clip layers of {clip} frames)",
-                            shot.name
-                        ),
-                        size,
-                    ));
-                    scratch += size / clips.max(1.0);
-                } else {
-                    files.push((name, size));
-                    scratch += size;
-                }
-            }
-            Format::Csv => files.push((name, bee_frames * CSV_BYTES)),
-        }
-    }
-    if plan.preview {
-        files.push((format!("{}.preview.png", shot.name), 200e3));
-    }
     let _ = writeln!(s, "  a bake would write into {}:", plan.out_dir.display());
-    for (name, size) in &files {
+    for (name, size) in &needs.files {
         let file = name.split(' ').next().unwrap_or(name);
         let replaces = if plan.out_dir.join(file).exists() {
             " (replaces the existing file)"
@@ -95,31 +48,56 @@ fn dry_run(plan: &super::bake::Plan) -> String {
         };
         let _ = writeln!(s, "    {name}: about {}{replaces}", bytes(*size));
     }
-    let disk: f64 = files.iter().map(|(_, b)| b).sum();
-    // Simulation state (two agent buffers, neighbour records and lists, the frame
-    // record), the glTF writer's per-bee state and document, one USDA frame of text.
-    let mut memory = 30e6 + bees * 700.0;
-    if plan
-        .formats
-        .iter()
-        .any(|f| matches!(f, Format::Glb | Format::Gltf))
-    {
-        memory += bees * (100.0 + GLTF_JSON_PER_BEE);
+    let _ = writeln!(
+        s,
+        "    {}: the set's manifest (files, sizes, SHA-256, shot hash, seed, frames)",
+        crate::cache_set::manifest_path(Path::new(""), &shot.name).display()
+    );
+    let previous = crate::cache_set::read(&plan.out_dir, &shot.name);
+    if let Some(problem) = previous.problem(&plan.out_dir, &shot.name) {
+        let _ = writeln!(s, "  note: {problem}");
     }
-    if plan.formats.contains(&Format::Usda) {
-        memory += bees * USDA_BYTES * 2.0;
+    for old in previous.files() {
+        if !writes(&old, &shot.name, &needs.files, needs.usda_clips) {
+            let _ = writeln!(s, "    {old}: removed (a file of the previous set)");
+        }
     }
+    let disk = needs.disk();
     let seconds = predicted_seconds(shot);
     let _ = writeln!(
         s,
         "  predicted: about {} of simulation (measured on a smaller copy of this shot), \
          {} of memory, {} of disk ({} while baking)",
         duration(seconds),
-        bytes(memory),
+        bytes(needs.memory),
         bytes(disk),
-        bytes(disk + scratch)
+        bytes(disk + needs.scratch)
     );
     s
+}
+
+/// Whether a bake writing `files` (names, with a description after a space) and, with
+/// clips, `clips` clip layers writes the previous set's file `old`.
+fn writes(old: &str, shot: &str, files: &[(String, f64)], clips: Option<usize>) -> bool {
+    if files
+        .iter()
+        .any(|(name, _)| name.split(' ').next() == Some(old))
+    {
+        return true;
+    }
+    let Some(count) = clips else {
+        return false;
+    };
+    let Some(layer) = old
+        .strip_prefix(&format!("{shot}.clips/{shot}."))
+        .and_then(|r| r.strip_suffix(".usda"))
+    else {
+        return false;
+    };
+    layer == "manifest"
+        || layer
+            .parse::<usize>()
+            .is_ok_and(|i| (1..=count).contains(&i))
 }
 
 /// Seconds to simulate `shot`, from two frames of a copy with at most 2,000 agents at the
@@ -155,14 +133,6 @@ fn predicted_seconds(shot: &Shot) -> f64 {
     per_agent_step * total * (shot.frame_count() as f64 - 1.0) * shot.substeps as f64
 }
 
-fn bytes(b: f64) -> String {
-    match b {
-        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
-        b if b >= 1e6 => format!("{:.0} MB", b / 1e6),
-        b => format!("{:.0} kB", (b / 1e3).max(1.0)),
-    }
-}
-
 fn duration(s: f64) -> String {
     match s {
         s if s >= 3600.0 => format!("{:.1} h", s / 3600.0),
@@ -182,28 +152,21 @@ fn mm(v: f32) -> String {
 fn crowding(w: &Swarm) -> String {
     // Beyond the most neighbours an agent interacts with, each feels only its nearest.
     const CROWDED: f64 = crate::model::context::MAX_NEIGHBOURS as f64;
-    let (shape, volume) = match w.spawn {
-        Region::Box { half, .. } => (
-            format!(
-                "box {} × {} × {} m",
-                mm(2.0 * half.x),
-                mm(2.0 * half.y),
-                mm(2.0 * half.z)
-            ),
-            8.0 * (half.x * half.y * half.z) as f64,
+    let shape = match w.spawn {
+        Region::Box { half, .. } => format!(
+            "box {} × {} × {} m",
+            mm(2.0 * half.x),
+            mm(2.0 * half.y),
+            mm(2.0 * half.z)
         ),
-        Region::Sphere { radius, .. } => (
-            format!("sphere of radius {} m", mm(radius)),
-            4.0 / 3.0 * std::f64::consts::PI * (radius as f64).powi(3),
-        ),
+        Region::Sphere { radius, .. } => format!("sphere of radius {} m", mm(radius)),
     };
-    let density = w.count as f64 / volume;
+    let (density, near) = density(w);
     let mut line = format!(
         "      spawn: {shape}, {} agents per m³",
         num(density.round())
     );
-    if let Some(h) = w.params.get("neighbour_radius") {
-        let neighbours = density * 4.0 / 3.0 * std::f64::consts::PI * h.powi(3);
+    if let Some((h, neighbours)) = near {
         line += &format!(
             " (about {} neighbours within {} m)",
             num(neighbours.round()),

@@ -6,6 +6,7 @@ mod bake;
 mod bench;
 mod check;
 pub mod models;
+mod resources;
 mod wedge;
 
 use crate::error::Error;

@@ -17,6 +17,7 @@ pub mod brownian;
 pub mod collision;
 pub mod context;
 pub mod curl;
+pub mod field;
 pub mod flight;
 pub mod params;
 pub mod targets;
@@ -69,6 +70,7 @@ registry! {$
     Curl => crate::model::curl::CurlModel,
     Brownian => crate::model::brownian::BrownianModel,
     Boids => crate::model::boids::BoidsModel,
+    Field => crate::model::field::FieldModel,
 }
 
 impl ModelKind {
@@ -199,6 +201,11 @@ pub trait Model: Sized + Send + Sync {
     fn target_particle_spacing(&self) -> Option<f32> {
         None
     }
+
+    /// Once per swarm per substep, before any agent steps, with the context the step pass
+    /// will see: for what a model derives from the world's moving parts (paper 001's path
+    /// field follows its goals). Nothing by default.
+    fn prepare(&mut self, _cx: &Context) {}
 
     /// A new agent: the world drew its place, direction, size and speed from `rng`; the
     /// model draws the rest of its state from the same stream.

@@ -173,6 +173,34 @@ pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// An error about `key` (a dotted path such as `swarm[0].count`) of a shot already read,
+/// located in its text `src` (the file `file`): for limits found after the shot resolved.
+pub fn error_at(
+    file: &Path,
+    src: &str,
+    key: &str,
+    message: String,
+    hint: Option<String>,
+) -> ShotError {
+    let loc = locate::Locator::new(src);
+    let (line, column, source_line) = match loc.span_of(key) {
+        Some(span) => {
+            let (l, c, s) = loc.line_col(span.start);
+            (l, c, Some(s))
+        }
+        None => (0, 0, None),
+    };
+    ShotError {
+        file: file.to_path_buf(),
+        line,
+        column,
+        key: key.to_owned(),
+        message,
+        source_line,
+        hint,
+    }
+}
+
 /// Reads and resolves a shot file.
 pub fn load(path: &Path) -> Result<Shot, ShotError> {
     let error = |line, column, message: String, hint: Option<&str>| ShotError {

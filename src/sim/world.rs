@@ -5,7 +5,7 @@
 //! the previous state and writes a new one agent by agent (in parallel); neighbour sums run
 //! in grid order, so results are identical for any number of threads.
 
-use super::agent_bytes::PlainAgent;
+use super::agent_bytes::AgentBytes;
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
 use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
@@ -66,7 +66,7 @@ trait Swarm: Send + Sync {
 
 impl<M: Model> Swarm for Runner<M>
 where
-    M::Agent: PlainAgent,
+    M::Agent: AgentBytes,
 {
     fn len(&self) -> usize {
         self.agents.len()
@@ -130,6 +130,7 @@ where
     }
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
+        self.model.prepare(cx);
         let m = &self.model;
         let (agents, start) = (&self.agents, self.start);
         self.next.clear();

@@ -437,11 +437,15 @@ def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
         "`obstacle[3].b`"
 
 
-def test_wing_flap_and_its_limit(scene):
+def test_wing_display_gltf_layout_flap_and_its_limit(scene):
     s = scene.beeswarm
-    s.wing_flap_hz = 6.0
     shot, _ = shot_builder.build_shot(scene, s)
-    assert tomllib.loads(shot_builder.shot_toml(shot))["output"] == {"wing_flap_hz": 6.0}
+    assert tomllib.loads(shot_builder.shot_toml(shot))["output"] == {
+        "wings": "blur", "gltf_layout": "agent"}
+    s.wings, s.gltf_layout, s.wing_flap_hz = "FLAP", "PARTS", 6.0
+    shot, _ = shot_builder.build_shot(scene, s)
+    assert tomllib.loads(shot_builder.shot_toml(shot))["output"] == {
+        "wings": "flap", "gltf_layout": "parts", "wing_flap_hz": 6.0}
     s.wing_flap_hz = 13.0  # 24 fps: above 12 Hz it would alias
     with pytest.raises(shot_builder.ShotBuildError, match="above half the frame rate"):
         shot_builder.build_shot(scene, s)
@@ -578,7 +582,7 @@ def names(items):
 
 def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
     s = scene.beeswarm.swarms[0]
-    assert names(props.model_items(s, bpy.context)) == ["bee", "curl", "brownian", "boids"]
+    assert names(props.model_items(s, bpy.context)) == ["bee", "curl", "brownian", "boids", "field"]
     expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
                                          text=True, check=True).stdout)
     for m in expected["models"]:
@@ -632,7 +636,7 @@ def test_models_are_asked_once_per_binary(with_binary, monkeypatch):
     monkeypatch.setattr(binary.subprocess, "run", lambda *a, **k: calls.append(a) or real(*a, **k))
     for _ in range(5):
         doc, reason = binary.models(with_binary)
-        assert reason == "" and len(doc["models"]) == 4
+        assert reason == "" and len(doc["models"]) == 5
     assert len(calls) == 1, "the menu callbacks run on every redraw: one query per binary"
 
 
@@ -695,7 +699,8 @@ def test_cancel_kills_the_bake_and_keeps_the_previous_cache(beeswarm_bin, tmp_pa
     assert time.monotonic() - t < 5
     assert p.returncode != 0 and p.cancelled
     assert cache.read_bytes() == before
-    assert sorted(x.name for x in out.iterdir() if not x.name.startswith(".")) == ["long.tracks.csv"]
+    assert sorted(x.name for x in out.iterdir() if not x.name.startswith(".")) == [
+        "long.beeswarm.json", "long.tracks.csv"]
 
 
 # ---------------------------------------------------------------------------------------
@@ -838,18 +843,20 @@ def test_usd_bake_imports_the_swarm_once_and_rebakes_in_place(scene, beeswarm_bi
 
 
 GLTF_BODY = re.compile(r"^bee_(\d+)_body$")
+GLTF_AGENT = re.compile(r"^bee_(\d+)$")
 
 
 def gltf_bodies(name):
-    """{bee id: object} for the imported glTF bees. The writer makes one node per bee,
-    `bee_<id>` (the path), with a child `bee_<id>_body` whose world transform is the
-    simulated pose: its world position is the tracks CSV position."""
-    out = {}
-    for o in bpy.data.collections[name].all_objects:
-        m = GLTF_BODY.match(o.name)
-        if m:
-            out[int(m.group(1))] = o
-    return out
+    """{bee id: object} for the imported glTF bees: the object whose world transform is the
+    simulated pose (its world position is the tracks CSV position). In the parts layout that
+    is `bee_<id>_body`, the child of the path node `bee_<id>`; in the agent layout (the
+    add-on's default) the one node `bee_<id>`."""
+    objects = bpy.data.collections[name].all_objects
+    for pattern in (GLTF_BODY, GLTF_AGENT):
+        out = {int(m.group(1)): o for o in objects if (m := pattern.match(o.name))}
+        if out:
+            return out
+    return {}
 
 
 def gltf_positions(name, frame):

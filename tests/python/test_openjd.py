@@ -79,7 +79,8 @@ def test_openjd_checks_and_runs_the_wedge_job(beeswarm_bin, openjd, tmp_path):
         caches = w / "caches" / f"meadow_{k}"
         names = sorted(p.name for p in caches.iterdir())
         # Every cache and the preview, and no checkpoint left behind.
-        assert names == [f"meadow_{k}.glb", f"meadow_{k}.preview.png", f"meadow_{k}.tracks.csv"], names
+        assert names == [f"meadow_{k}.beeswarm.json", f"meadow_{k}.glb", f"meadow_{k}.preview.png",
+                         f"meadow_{k}.tracks.csv"], names
         rows = (caches / f"meadow_{k}.tracks.csv").read_text().splitlines()
         assert len(rows) == 1 + 20 * 12
         tracks[k] = [r.split(",", 1)[1] for r in rows[1:]]
@@ -95,7 +96,7 @@ def test_openjd_checks_and_runs_the_wedge_job(beeswarm_bin, openjd, tmp_path):
     local = tmp_path / "local"
     wedge(beeswarm_bin, tmp_path, local, "--run", "--quiet")
     for k in range(1, 5):
-        for suffix in ("glb", "tracks.csv", "preview.png"):
+        for suffix in ("glb", "tracks.csv", "preview.png", "beeswarm.json"):
             name = f"meadow_{k}.{suffix}"
             a = (w / "caches" / f"meadow_{k}" / name).read_bytes()
             b = (local / "caches" / f"meadow_{k}" / name).read_bytes()
