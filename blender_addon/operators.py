@@ -474,7 +474,78 @@ class BEESWARM_OT_write_shot(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (BEESWARM_OT_bake, BEESWARM_OT_write_shot)
+class BEESWARM_OT_write_wedge(bpy.types.Operator):
+    """Write a wedge of the scene's shot: variant shots and an Open Job Description job
+    (docs/farm.md). Each --vary is KEY=VALUES, e.g. seed=1..4 swarm.bees.params.speed=0.8,1.2"""
+
+    bl_idname = "beeswarm.write_wedge"
+    bl_label = "Wedge…"
+
+    vary: StringProperty(name="Vary", default="seed=1..4",
+                         description="KEY=VALUES, several separated by spaces (beeswarm wedge --vary)")
+    out_dir: StringProperty(name="Folder", subtype="DIR_PATH", default="",
+                            description="The wedge folder (default: //beeswarm_wedge/<shot>/)")
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_props_dialog(self)
+
+    def execute(self, context):
+        import shlex
+        import subprocess
+
+        settings = context.scene.beeswarm
+        bin_path, msg = binary.resolve(props.preference_binary(context))
+        if bin_path is None:
+            self.report({"ERROR"}, msg)
+            return {"CANCELLED"}
+        try:
+            varies = shlex.split(self.vary)
+        except ValueError as e:
+            self.report({"ERROR"}, f"Vary: {e}")
+            return {"CANCELLED"}
+        if not varies:
+            self.report({"ERROR"}, "Vary: give at least one KEY=VALUES, e.g. seed=1..4")
+            return {"CANCELLED"}
+        if settings.source == "FILE":
+            shot_path = pathlib.Path(bpy.path.abspath(settings.shot_file))
+            name = shot_path.name.split(".")[0]
+        else:
+            ensure_swarm(settings)
+            try:
+                shot, warnings = shot_builder.build_shot(context.scene, settings)
+            except shot_builder.ShotBuildError as e:
+                self.report({"ERROR"}, str(e))
+                return {"CANCELLED"}
+            for w in warnings:
+                self.report({"WARNING"}, w)
+            name = shot["scene"]["name"]
+            shot_path = (_blend_dir() or _unsaved_dir()) / f"{name}.shot.toml"
+            if shot_path.exists() and not _written_by_addon(shot_path):
+                self.report({"ERROR"}, f"{shot_path} exists and was not written by the add-on")
+                return {"CANCELLED"}
+            source = os.path.basename(bpy.data.filepath) if bpy.data.filepath else "an unsaved file"
+            shot_path.write_text(shot_builder.shot_toml(shot, source), encoding="utf-8")
+        if self.out_dir:
+            out = pathlib.Path(bpy.path.abspath(self.out_dir))
+        elif bpy.data.filepath:
+            out = _blend_dir() / "beeswarm_wedge" / name
+        else:
+            out = _unsaved_dir() / "beeswarm_wedge" / name
+        args = [str(bin_path), "wedge", str(shot_path), "--out", str(out), "--quiet"]
+        for v in varies:
+            args += ["--vary", v]
+        r = subprocess.run(args, capture_output=True, text=True)
+        if r.returncode != 0:
+            message = (r.stderr.strip().splitlines() or [f"exit code {r.returncode}"])[0]
+            settings.last_message = f"Error: {message}"
+            self.report({"ERROR"}, r.stderr.strip() or message)
+            return {"CANCELLED"}
+        settings.last_message = f"Wrote a wedge in {out} (openjd run {out / 'job.yaml'})"
+        self.report({"INFO"}, settings.last_message)
+        return {"FINISHED"}
+
+
+classes = (BEESWARM_OT_bake, BEESWARM_OT_write_shot, BEESWARM_OT_write_wedge)
 
 
 def register():

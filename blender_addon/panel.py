@@ -53,8 +53,12 @@ class BEESWARM_PT_panel(bpy.types.Panel):
         op.format = imported
         op.also_formats = set(s.formats) - {imported}
         op.shot_path = s.shot_file if s.source == "FILE" else ""
+        row = layout.row(align=True)
         if s.source == "SCENE":
-            layout.operator("beeswarm.write_shot", icon="FILE_TEXT")
+            row.operator("beeswarm.write_shot", icon="FILE_TEXT")
+        wedge = row.row(align=True)
+        wedge.enabled = path is not None
+        wedge.operator("beeswarm.write_wedge", icon="MOD_ARRAY")
         hint = motion_blur_hint(context.scene, swarm_list.active_swarm(s), props.models_doc(context)[0])
         if hint:
             box = layout.box()

@@ -99,12 +99,30 @@ pub fn bake(
     opts: &BakeOptions,
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Vec<PathBuf>> {
+    bake_resumable(shot, opts, None, progress)
+}
+
+/// [`bake`] with checkpoints (`--checkpoint-every`, `--resume`; see `crate::checkpoint`):
+/// frames before a restored checkpoint are replayed from its journal, the rest simulated.
+pub fn bake_resumable(
+    shot: &Shot,
+    opts: &BakeOptions,
+    checkpoints: Option<&crate::checkpoint::CheckpointOptions>,
+    progress: &mut (dyn FnMut(Progress) + Send),
+) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
     // What bakes killed outright (kill -9, out of memory) left here goes first.
     crate::cache_set::remove_stale_temporaries(opts.out_dir, &shot.name);
     let start = Instant::now();
     let mut sim = Simulation::new(shot);
     sim.set_cancel(&INTERRUPTED);
+    let (mut checkpointer, mut replay) = match checkpoints {
+        Some(c) => {
+            let (ck, replay) = crate::checkpoint::open(c, shot, opts.out_dir, &mut sim)?;
+            (ck, Some(replay))
+        }
+        None => (None, None),
+    };
     let meta = sim.meta();
     let info = SetInfo::of(shot);
     let out_dir = opts.out_dir;
@@ -166,16 +184,31 @@ pub fn bake(
         });
         let simulated = with_threads(opts.threads, || -> Result<()> {
             for done in 1..=total {
-                if done > 1 && !sim.advance_or_cancel() {
-                    return Err(Error::bake(INTERRUPTED_MESSAGE));
-                }
-                if INTERRUPTED.load(Ordering::Relaxed) {
-                    return Err(Error::bake(INTERRUPTED_MESSAGE));
-                }
-                let msg = Message::Frame {
-                    frame: sim.frame(),
-                    time: sim.time(),
-                    swarms: sim.record().to_vec(),
+                let replayed = replay.as_mut().map(|r| r.next_frame()).transpose()?;
+                let (frame, msg) = if let Some(f) = replayed.flatten() {
+                    // Made before the checkpoint: sent from its journal as it was.
+                    let msg = Message::Frame {
+                        frame: f.frame,
+                        time: f.time,
+                        swarms: f.swarms,
+                    };
+                    (f.frame, msg)
+                } else {
+                    if done > 1 && !sim.advance_or_cancel() {
+                        return Err(Error::bake(INTERRUPTED_MESSAGE));
+                    }
+                    if INTERRUPTED.load(Ordering::Relaxed) {
+                        return Err(Error::bake(INTERRUPTED_MESSAGE));
+                    }
+                    if let Some(ck) = checkpointer.as_mut() {
+                        ck.after_frame(&sim)?;
+                    }
+                    let msg = Message::Frame {
+                        frame: sim.frame(),
+                        time: sim.time(),
+                        swarms: sim.record().to_vec(),
+                    };
+                    (sim.frame(), msg)
                 };
                 if tx.send(msg).is_err() {
                     // The writer stopped on an error; it reports it below.
@@ -184,7 +217,7 @@ pub fn bake(
                 progress(Progress {
                     done,
                     total,
-                    frame: sim.frame(),
+                    frame,
                     elapsed_s: start.elapsed().as_secs_f64(),
                 });
                 if pausing() {
@@ -199,6 +232,14 @@ pub fn bake(
             .join()
             .unwrap_or_else(|_| Err(Error::bake("a cache writer failed unexpectedly")));
         simulated?;
-        written
+        let written = written?;
+        // The caches are in place: the checkpoint has done its work.
+        if let Some(ck) = checkpointer {
+            ck.finish();
+        }
+        if checkpoints.is_some() {
+            let _ = std::fs::remove_dir_all(crate::checkpoint::folder(opts.out_dir, shot));
+        }
+        Ok(written)
     })
 }

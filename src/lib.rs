@@ -11,6 +11,7 @@
 pub mod atomic;
 pub mod bake;
 pub mod cache_set;
+pub mod checkpoint;
 pub mod cli;
 pub mod error;
 pub mod export;
@@ -21,6 +22,7 @@ pub mod model;
 pub mod shot;
 pub mod sim;
 pub mod species;
+pub mod wedge;
 
 pub use error::{Error, Result};
 pub mod eval;

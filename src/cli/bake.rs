@@ -1,6 +1,7 @@
 //! `beeswarm bake`: shot → caches.
 
-use crate::bake::{BakeOptions, INTERRUPTED, bake};
+use crate::bake::{BakeOptions, INTERRUPTED, bake_resumable};
+use crate::checkpoint::CheckpointOptions;
 use crate::error::{Error, Result};
 use crate::export::Format;
 use crate::progress::{Mode, Reporter};
@@ -40,6 +41,14 @@ pub struct BakeArgs {
     /// Also write <shot name>.preview.png, a plot of the trajectories.
     #[arg(long)]
     pub preview: bool,
+    /// Write the simulation state every N frames (to <out>/<name>.checkpoint/), so a
+    /// bake killed part-way can continue with --resume (0: no checkpoints).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub checkpoint_every: u32,
+    /// Continue from the checkpoint in the output folder, if one fits this shot; the
+    /// caches are byte-identical to an uninterrupted bake's. Without one, bake afresh.
+    #[arg(long)]
+    pub resume: bool,
     /// Bake a shot over the limits (memory above what is available, disk above what is
     /// free, more than 10⁹ neighbour pairs at spawn), which is refused otherwise.
     #[arg(long)]
@@ -123,7 +132,14 @@ pub fn run(a: BakeArgs) -> Result<()> {
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
     let mut reporter = Reporter::new(a.progress, shot.frame_count(), a.quiet);
     let started = std::time::Instant::now();
-    let result = bake(&shot, &opts, &mut |p| reporter.update(p));
+    let checkpoints = (a.checkpoint_every > 0 || a.resume).then_some(CheckpointOptions {
+        every: a.checkpoint_every,
+        resume: a.resume,
+        quiet: a.quiet,
+    });
+    let result = bake_resumable(&shot, &opts, checkpoints.as_ref(), &mut |p| {
+        reporter.update(p)
+    });
     match result {
         Ok(outputs) => {
             reporter.finish(&outputs);

@@ -1,4 +1,5 @@
-//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`, `fastswarm-db`. `main.rs` only calls
+//! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`,
+//! `fastswarm-db`, `wedge`, `gather`. `main.rs` only calls
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
@@ -7,6 +8,7 @@ mod check;
 mod fastswarm_db;
 pub mod models;
 mod resources;
+mod wedge;
 
 use crate::error::Error;
 use clap::{Parser, Subcommand};
@@ -28,6 +30,8 @@ pub enum Command {
     Eval(crate::eval::EvalArgs),
     Calibrate(crate::eval::CalibrateArgs),
     FastswarmDb(fastswarm_db::FastswarmDbArgs),
+    Wedge(wedge::WedgeArgs),
+    Gather(wedge::GatherArgs),
 }
 
 /// Parses arguments, runs the command, prints any error, returns the exit code.
@@ -48,6 +52,8 @@ pub fn main() -> i32 {
         Command::Eval(a) => crate::eval::run_eval(&a),
         Command::Calibrate(a) => crate::eval::run_calibrate(&a),
         Command::FastswarmDb(a) => fastswarm_db::run(a),
+        Command::Wedge(a) => wedge::run(a),
+        Command::Gather(a) => wedge::gather(a),
     };
     match result {
         Ok(()) => 0,

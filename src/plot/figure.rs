@@ -75,6 +75,18 @@ impl Figure {
         Some([self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]])
     }
 
+    /// Pastes an RGB image (`w` × `h`, row-major, 3 bytes per pixel) with its top-left
+    /// corner at (x, y), clipped to the figure: for figures made of pictures (a wedge's
+    /// contact sheet of previews).
+    pub fn paste(&mut self, x: u32, y: u32, w: u32, h: u32, rgb: &[u8]) {
+        let cols = w.min(self.width.saturating_sub(x)) as usize;
+        for row in 0..h.min(self.height.saturating_sub(y)) as usize {
+            let src = row * w as usize * 3;
+            let dst = ((y as usize + row) * self.width as usize + x as usize) * 3;
+            self.rgb[dst..dst + cols * 3].copy_from_slice(&rgb[src..src + cols * 3]);
+        }
+    }
+
     /// Encodes the figure as an 8-bit RGB PNG.
     pub fn encode_png(&self) -> Result<Vec<u8>> {
         let err = |e: png::EncodingError| Error::bake(format!("cannot encode PNG: {e}"));

@@ -1,4 +1,5 @@
 //! The simulation: world state, stepping, neighbour grid, and what is recorded.
+pub mod agent_bytes;
 pub mod frame;
 
 pub mod world;

@@ -5,6 +5,7 @@
 //! the previous state and writes a new one agent by agent (in parallel); neighbour sums run
 //! in grid order, so results are identical for any number of threads.
 
+use super::agent_bytes::AgentBytes;
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
 use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
@@ -57,9 +58,16 @@ trait Swarm: Send + Sync {
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
     /// Fills the frame record of this swarm.
     fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32);
+    /// Appends the agents' state (checkpoints).
+    fn agent_bytes(&self, out: &mut Vec<u8>);
+    /// Replaces the agents' state with bytes from `agent_bytes`; false if they do not fit.
+    fn set_agent_bytes(&mut self, bytes: &[u8]) -> bool;
 }
 
-impl<M: Model> Swarm for Runner<M> {
+impl<M: Model> Swarm for Runner<M>
+where
+    M::Agent: AgentBytes,
+{
     fn len(&self) -> usize {
         self.agents.len()
     }
@@ -193,6 +201,20 @@ impl<M: Model> Swarm for Runner<M> {
         for (c, column) in f.channels.iter_mut().enumerate() {
             column.clear();
             column.extend(self.values.iter().skip(c).step_by(channels));
+        }
+    }
+
+    fn agent_bytes(&self, out: &mut Vec<u8>) {
+        super::agent_bytes::to_bytes(&self.agents, out);
+    }
+
+    fn set_agent_bytes(&mut self, bytes: &[u8]) -> bool {
+        match super::agent_bytes::from_bytes::<M::Agent>(bytes) {
+            Some(agents) if agents.len() == self.agents.len() => {
+                self.agents = agents;
+                true
+            }
+            _ => false,
         }
     }
 }
@@ -544,6 +566,64 @@ impl Simulation {
             swarm.step(&cx, self.cancel);
         }
         self.step_index += 1;
+    }
+
+    /// The whole evolving state — frame, step count and every agent — as bytes, for a
+    /// checkpoint (see docs/farm.md). Everything else is rebuilt from the shot every step.
+    /// Native byte order: resumed on a machine of the same architecture.
+    pub fn state_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        out.extend_from_slice(&self.frame.to_le_bytes());
+        out.extend_from_slice(&self.step_index.to_le_bytes());
+        out.extend_from_slice(&(self.swarms.len() as u64).to_le_bytes());
+        for s in &self.swarms {
+            let mut agents = Vec::new();
+            s.agent_bytes(&mut agents);
+            out.extend_from_slice(&(agents.len() as u64).to_le_bytes());
+            out.extend_from_slice(&agents);
+        }
+        out
+    }
+
+    /// Continues from `state_bytes` of a simulation of the same shot: afterwards it steps
+    /// and records exactly as that simulation did. An error says why the bytes do not fit
+    /// (and leaves this simulation unusable).
+    pub fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let mut rest = bytes;
+        let mut take = |n: usize| -> Result<&[u8], String> {
+            if rest.len() < n {
+                return Err("the state ends early".to_owned());
+            }
+            let (head, tail) = rest.split_at(n);
+            rest = tail;
+            Ok(head)
+        };
+        let frame = i32::from_le_bytes(take(4)?.try_into().expect("4 bytes"));
+        let step_index = u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"));
+        let swarms = u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"));
+        if swarms != self.swarms.len() as u64 {
+            return Err(format!(
+                "{swarms} swarms, the shot has {}",
+                self.swarms.len()
+            ));
+        }
+        if frame < self.shot.frame_start || frame > self.shot.frame_end {
+            return Err(format!("frame {frame} is outside the shot's frames"));
+        }
+        for (i, s) in self.swarms.iter_mut().enumerate() {
+            let n = u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"));
+            let agents = take(usize::try_from(n).map_err(|_| "too large".to_owned())?)?;
+            if !s.set_agent_bytes(agents) {
+                return Err(format!("swarm {i}'s agents do not match the shot"));
+            }
+        }
+        if !rest.is_empty() {
+            return Err("extra bytes after the state".to_owned());
+        }
+        self.frame = frame;
+        self.step_index = step_index;
+        self.update_record();
+        Ok(())
     }
 
     fn update_record(&mut self) {

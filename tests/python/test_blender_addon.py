@@ -1011,6 +1011,7 @@ def test_panel_draws_settings_and_says_when_no_binary(scene, monkeypatch, beeswa
     props_shown = {t for kind, t in log if kind == "prop"}
     assert {"count", "preset", "seed", "obstacles", "targets", "formats"} <= props_shown
     assert ("operator", "beeswarm.bake") in log
+    assert ("operator", "beeswarm.write_wedge") in log
     monkeypatch.setattr(binary, "discover", lambda *a, **k: pathlib.Path(beeswarm_bin))
     scene.beeswarm.source = "FILE"
     log = draw_panel(bpy.context)
@@ -1441,6 +1442,28 @@ def test_shot_file_with_two_swarms(scene, beeswarm_bin, tmp_path):
             row = tracks[int(bee)][12]
             assert np.allclose(v, [row["vx"], row["vy"], row["vz"]], atol=1e-5)
     assert seen == {"near": 15, "far": 25}
+
+
+def test_wedge_operator_writes_the_scenes_wedge_and_a_variant_bakes(scene, with_binary, tmp_path):
+    """Wedge…: the scene's shot as a wedge (variants, OpenJD job); any variant then bakes
+    and imports like any shot file."""
+    out = tmp_path / "wedge"
+    assert bpy.ops.beeswarm.write_wedge(vary="seed=1..2 swarm.0.count=10,20",
+                                        out_dir=str(out)) == {"FINISHED"}
+    assert (tmp_path / "bltest.shot.toml").is_file()
+    variants = sorted(p.name for p in (out / "variants").iterdir())
+    assert variants == [f"bltest_{k}.toml" for k in range(1, 5)]
+    assert "jobtemplate-2023-09" in (out / "job.yaml").read_text()
+    assert "count = 20" in (out / "variants" / "bltest_4.toml").read_text()
+    assert "openjd run" in scene.beeswarm.last_message
+    assert run_bake(with_binary, "USD", shot_path=str(out / "variants" / "bltest_4.toml")) == {"FINISHED"}
+    tracks = read_tracks(tmp_path / "beeswarm_cache" / "bltest_4" / "bltest_4.tracks.csv")
+    assert len(tracks) == 20
+    # A bad variant is refused with the binary's located message; nothing new is written.
+    with pytest.raises(RuntimeError, match="swarm"):
+        bpy.ops.beeswarm.write_wedge(vary="swarm.nobody.count=3", out_dir=str(tmp_path / "bad"))
+    assert scene.beeswarm.last_message.startswith("Error")
+    assert not (tmp_path / "bad").exists()
 
 
 def test_write_shot_file_operator(scene, beeswarm_bin, tmp_path):
