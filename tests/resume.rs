@@ -6,9 +6,9 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-/// Four models (a bee swarm with its channels, a boids flock, Brownian flyers whose
-/// random kicks depend on the step count, paper 001's field insects), an obstacle and a
-/// target.
+/// Six models (a bee swarm with its channels, a boids flock, Brownian flyers whose
+/// random kicks depend on the step count, paper 001's field insects, paper 002's zonal
+/// insects escaping a predator, paper 003's fastswarm insects), obstacles and targets.
 const SHOT: &str = r#"
 [scene]
 name = "resume"
@@ -34,6 +34,22 @@ name = "midges"
 model = "field"
 count = 30
 spawn = { shape = "box", center = [-1.0, 1.0, 0.0], size = [1.0, 1.0, 1.0] }
+[[swarm]]
+name = "gnats"
+model = "zonal"
+preset = "escape"
+count = 40
+spawn = { shape = "box", center = [0.0, 1.5, -1.0], size = [0.3, 0.3, 0.3] }
+[[swarm]]
+name = "mosquitoes"
+model = "fastswarm"
+count = 30
+spawn = { shape = "box", center = [1.0, 1.5, -1.0], size = [0.5, 0.5, 0.5] }
+[[target]]
+type = "predator"
+name = "bat"
+keys = [{ frame = 1, position = [-0.6, 1.5, -1.0] }, { frame = 30, position = [0.6, 1.5, -1.0] }]
+swarms = ["gnats"]
 [[obstacle]]
 type = "plane"
 name = "ground"
