@@ -6,8 +6,9 @@ use crate::plot::{Figure, palette, px, text};
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Width of one variant's thumbnail, pixels.
-const THUMB_W: usize = 640;
+/// Width of one variant's thumbnail at most, pixels: half a preview (1,320 pixels wide),
+/// which shrinks by a whole factor.
+const THUMB_W: usize = 660;
 const COLUMNS: usize = 4;
 const GAP: usize = 16;
 const LABEL_H: usize = 30;
