@@ -253,3 +253,36 @@ fn with_a_reference_the_gather_step_ranks_the_variants() {
     assert_eq!(rows[0][3], "speed=1.0", "{md}");
     assert!(md.contains("## Per metric (eval)"), "{md}");
 }
+
+#[test]
+fn a_wedge_rewritten_with_fewer_variants_removes_the_others_and_their_caches() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("small.toml"), SHOT).unwrap();
+    let wedge = |seeds: &str| {
+        let out = beeswarm(p, &["wedge", "small.toml", "--vary", seeds, "--out", "w"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    wedge("seed=1..4");
+    // Variant 4 baked (a stand-in cache), and a file of the user's beside the caches.
+    std::fs::create_dir_all(p.join("w/caches/small_4")).unwrap();
+    std::fs::write(p.join("w/caches/small_4/small_4.tracks.csv"), "x").unwrap();
+    std::fs::write(p.join("w/caches/notes.txt"), "mine").unwrap();
+    wedge("seed=1..2");
+    let variants: Vec<String> = std::fs::read_dir(p.join("w/variants"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    let mut variants = variants;
+    variants.sort();
+    assert_eq!(variants, ["small_1.toml", "small_2.toml"]);
+    assert!(!p.join("w/caches/small_4").exists());
+    assert!(
+        p.join("w/caches/notes.txt").exists(),
+        "not the wedge's: kept"
+    );
+}

@@ -162,6 +162,7 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
     for (text, e) in texts.iter().zip(&entries) {
         write_file(&dir.join(e.shot()), text.as_bytes())?;
     }
+    remove_stale_variants(&dir, &entries);
     let reference = match spec.reference {
         Some(r) => {
             let bytes = std::fs::read(r).map_err(|e| Error::io(r, e))?;
@@ -192,6 +193,28 @@ pub fn write(spec: &WedgeSpec) -> Result<Manifest> {
     write_file(&dir.join("job.yaml"), template.as_bytes())?;
     write_file(&dir.join("template.yaml"), template.as_bytes())?;
     Ok(manifest)
+}
+
+/// A wedge rewritten with fewer (or other) variants: the previous wedge's variants this one
+/// no longer has go, with their caches, so the folder holds one wedge. Only what the
+/// previous manifest named, and only plain names (a manifest naming `../x` removes
+/// nothing).
+fn remove_stale_variants(dir: &Path, entries: &[ManifestVariant]) {
+    let Ok(old) = read_manifest(dir) else {
+        return;
+    };
+    let plain = |name: &str| {
+        !name.is_empty()
+            && name != "."
+            && name != ".."
+            && Path::new(name).file_name() == Some(std::ffi::OsStr::new(name))
+    };
+    for v in &old.variants {
+        if plain(&v.name) && !entries.iter().any(|e| e.name == v.name) {
+            let _ = std::fs::remove_file(dir.join(v.shot()));
+            let _ = std::fs::remove_dir_all(dir.join(v.caches()));
+        }
+    }
 }
 
 /// Reads a wedge folder's manifest.
