@@ -121,6 +121,25 @@ fn a_bad_variant_fails_the_whole_wedge_with_a_located_error() {
         "{err}"
     );
 
+    // A key the shot does not have is added by the wedge: its line is the variant's.
+    let out = beeswarm(
+        p,
+        &[
+            "wedge",
+            "small.toml",
+            "--vary",
+            "swarm.bees.variation.size=0.1,7",
+            "--out",
+            "w",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("small.toml as wedge variant 2 writes it:") && err.contains("variation"),
+        "{err}"
+    );
+
     let out = beeswarm(
         p,
         &["wedge", "small.toml", "--vary", "seed=3..1", "--out", "w"],

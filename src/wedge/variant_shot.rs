@@ -136,6 +136,19 @@ pub fn varied_text(src: &str, shot_path: &Path, index: usize, variant: &Variant)
             e.message,
             variant.label()
         );
+        // A line the wedge added (a key the shot did not have) is not a line of the shot
+        // file: say whose text the location is in.
+        let key_of = |line: &str| line.split('=').next().unwrap_or("").trim().to_owned();
+        let (ours, theirs) = (
+            src.lines().nth(e.line.wrapping_sub(1)),
+            text.lines().nth(e.line.wrapping_sub(1)),
+        );
+        if e.line > 0 && ours.map(key_of) != theirs.map(key_of) {
+            e.file = PathBuf::from(format!(
+                "{} as wedge variant {index} writes it",
+                shot_path.display()
+            ));
+        }
         Error::Shot(Box::new(e))
     })?;
     Ok(text)
