@@ -3,38 +3,11 @@
 //! numbers measured from the tracks, and print the numbers (docs/validation.md records
 //! them; `cargo test --release --test paper000 -- --nocapture` shows them).
 
-use beeswarm::eval::collective::{self, Frames, ShapeOptions};
-use beeswarm::sim::Simulation;
-use glam::Vec3;
-use std::collections::BTreeMap;
-use std::path::Path;
+mod common;
 
-/// Bakes an example in memory: every swarm's positions and velocities per frame, by name.
-fn bake(example: &str) -> BTreeMap<String, Frames> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(example);
-    let shot = beeswarm::shot::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::new(&shot);
-    let n = shot.swarms.len();
-    let mut pos: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
-    let mut vel: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
-    loop {
-        for (k, s) in sim.record().iter().enumerate() {
-            pos[k].push(s.position.clone());
-            vel[k].push(s.velocity.clone());
-        }
-        if sim.done() {
-            break;
-        }
-        sim.advance();
-    }
-    shot.swarms
-        .iter()
-        .zip(pos.into_iter().zip(vel))
-        .map(|(s, (p, v))| (s.name.clone(), Frames::new(shot.fps, p, v).unwrap()))
-        .collect()
-}
+use beeswarm::eval::collective::{self, Frames, ShapeOptions};
+use common::bake_example as bake;
+use std::collections::BTreeMap;
 
 /// The frames from `from_s` seconds on (the swarm has left its spawn box by then).
 fn after(f: &Frames, from_s: f64) -> Frames {

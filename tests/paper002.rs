@@ -3,38 +3,13 @@
 //! the claims on numbers measured from the tracks and print them (docs/validation.md
 //! records them; `cargo test --release --test paper002 -- --nocapture` shows them).
 
+mod common;
+
 use beeswarm::eval::collective::{self, Frames};
-use beeswarm::sim::Simulation;
+use common::bake_example as bake;
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// Bakes an example in memory: every swarm's positions and velocities per frame, by name.
-fn bake(example: &str) -> BTreeMap<String, Frames> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(example);
-    let shot = beeswarm::shot::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::new(&shot);
-    let n = shot.swarms.len();
-    let mut pos: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
-    let mut vel: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
-    loop {
-        for (k, s) in sim.record().iter().enumerate() {
-            pos[k].push(s.position.clone());
-            vel[k].push(s.velocity.clone());
-        }
-        if sim.done() {
-            break;
-        }
-        sim.advance();
-    }
-    shot.swarms
-        .iter()
-        .zip(pos.into_iter().zip(vel))
-        .map(|(s, (p, v))| (s.name.clone(), Frames::new(shot.fps, p, v).unwrap()))
-        .collect()
-}
 
 fn centroid(p: &[Vec3]) -> Vec3 {
     p.iter().copied().sum::<Vec3>() / p.len() as f32

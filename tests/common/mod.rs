@@ -1,9 +1,11 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use beeswarm::eval::collective::Frames;
 use beeswarm::shot::{self, Shot};
 use beeswarm::sim::Simulation;
 use glam::Vec3;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 pub fn shot(src: &str) -> Shot {
@@ -77,4 +79,31 @@ pub fn files_under(dir: &Path) -> Vec<String> {
     }
     out.sort();
     out
+}
+
+/// Bakes an example in memory: every swarm's positions and velocities per frame, by name.
+pub fn bake_example(example: &str) -> BTreeMap<String, Frames> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(example);
+    let shot = beeswarm::shot::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = Simulation::new(&shot);
+    let n = shot.swarms.len();
+    let mut pos: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
+    let mut vel: Vec<Vec<Vec<Vec3>>> = vec![Vec::new(); n];
+    loop {
+        for (k, s) in sim.record().iter().enumerate() {
+            pos[k].push(s.position.clone());
+            vel[k].push(s.velocity.clone());
+        }
+        if sim.done() {
+            break;
+        }
+        sim.advance();
+    }
+    shot.swarms
+        .iter()
+        .zip(pos.into_iter().zip(vel))
+        .map(|(s, (p, v))| (s.name.clone(), Frames::new(shot.fps, p, v).unwrap()))
+        .collect()
 }
