@@ -170,8 +170,10 @@ impl Grid {
     fn capped(&self, lo: Vec3, hi: Vec3, cell: f32, n: usize) -> f32 {
         let extent = (hi - lo).max(Vec3::splat(1e-6));
         // Up to 32 cells per agent (a crowd inside a wide sparse cloud needs fine cells
-        // over the whole box), capped at 2^25 cells (128 MB of cell starts).
-        let budget = (32 * n).min(1 << 25).max(8 * n).max(32_768) as f32;
+        // over the whole box), capped at 2^25 cells (128 MB of cell starts). A small
+        // swarm gets at least 1,024: every build walks every cell, and for a few dozen
+        // agents a larger floor made the build cost more than their step.
+        let budget = (32 * n).min(1 << 25).max(8 * n).max(1_024) as f32;
         let cells = (extent.x / cell + 1.0) * (extent.y / cell + 1.0) * (extent.z / cell + 1.0);
         if cells > budget {
             cell * (cells / budget).cbrt() * 1.01
