@@ -366,7 +366,8 @@ pub fn verify(dir: &Path, shot_name: &str) -> std::result::Result<Manifest, Stri
 /// For tests of what a kill leaves (tests/cache_set_kills.rs): when the environment
 /// variable `BEESWARM_PAUSE_AT` names this point, the process says so on stderr and
 /// waits, to be killed there. Points: `frame <n>` (after frame n of the range, counted
-/// from 1, went to the writers), `sealed <k>` (after the k-th format's files were
+/// from 1, went to the writers), `journaled <f>` (shot frame f is in the checkpoint
+/// journal, `--checkpoint-every`), `sealed <k>` (after the k-th format's files were
 /// sealed), `hashed`, `replacing` (the manifest says so, nothing renamed yet),
 /// `renamed <i>` (after the i-th rename), `removed` (before the complete manifest).
 /// An interrupt (Ctrl-C) ends the wait and the bake goes on to stop as usual.

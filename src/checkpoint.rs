@@ -75,8 +75,6 @@ pub struct Checkpointer {
     frame_start: i32,
     journal: BufWriter<File>,
     journal_len: u64,
-    /// Test hook: stop (as if killed) after this frame.
-    pause_after: Option<i32>,
 }
 
 /// Frames to replay from the journal before simulating on.
@@ -180,9 +178,6 @@ pub fn open(
     file.set_len(journal_len)
         .and_then(|()| file.seek(std::io::SeekFrom::Start(journal_len)).map(|_| ()))
         .map_err(|e| Error::io(&path, e))?;
-    let pause_after = std::env::var("BEESWARM_TEST_PAUSE_AFTER_FRAME")
-        .ok()
-        .and_then(|v| v.parse().ok());
     Ok((
         Some(Checkpointer {
             dir,
@@ -191,7 +186,6 @@ pub fn open(
             frame_start: shot.frame_start,
             journal: BufWriter::new(file),
             journal_len,
-            pause_after,
         }),
         replay,
     ))
@@ -232,12 +226,9 @@ impl Checkpointer {
                 .map_err(|e| Error::io(&path, e))?;
             self.write_state(sim)?;
         }
-        if self.pause_after == Some(sim.frame()) {
+        if crate::cache_set::pausing() {
             // Tests kill the bake here, between checkpoints, as a farm pre-empts a task.
-            eprintln!("paused after frame {}", sim.frame());
-            loop {
-                std::thread::park();
-            }
+            crate::cache_set::pause_point(&format!("journaled {}", sim.frame()));
         }
         Ok(())
     }

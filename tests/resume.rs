@@ -80,7 +80,7 @@ fn bake_and_kill_after(dir: &Path, out: &str, frame: i32, extra: &[&str]) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
         .args(["bake", "shot.toml", "--out", out, "--checkpoint-every", "4"])
         .args(extra)
-        .env("BEESWARM_TEST_PAUSE_AFTER_FRAME", frame.to_string())
+        .env("BEESWARM_PAUSE_AT", format!("journaled {frame}"))
         .current_dir(dir)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -90,7 +90,7 @@ fn bake_and_kill_after(dir: &Path, out: &str, frame: i32, extra: &[&str]) {
     let mut seen = Vec::new();
     for line in stderr.lines() {
         let line = line.unwrap();
-        let paused = line.contains(&format!("paused after frame {frame}"));
+        let paused = line.contains(&format!("paused at journaled {frame}"));
         seen.push(line);
         if paused {
             break;
