@@ -6,6 +6,9 @@ tab; the operator `beeswarm.bake` does the work and can be scripted:
     bpy.ops.beeswarm.bake(shot_path="", format='USD', binary_path="")
 """
 from . import motion, operators, panel, props, swarm_list
+# Blender's glTF importer looks up this name in every enabled add-on's module; the hooks act
+# only while the add-on imports a cache (gltf_hooks.py).
+from .gltf_hooks import GltfImportHooks as glTF2ImportUserExtension  # noqa: F401
 
 _modules = (props, swarm_list, operators, panel, motion)
 

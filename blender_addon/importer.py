@@ -4,7 +4,8 @@ import os
 import tomllib
 
 import bpy
-import numpy as np
+
+from . import gltf_hooks
 
 SHOT_TAG = "beeswarm_shot"  # ID property on every data-block an import created
 
@@ -120,45 +121,13 @@ def _find_layer_collection(layer_coll, coll):
     return None
 
 
-def _fcurves(action):
-    """Every F-curve of an action: layered actions (4.4+, the only kind in 5.0) or legacy."""
-    layers = getattr(action, "layers", None)
-    if layers is not None and len(layers):
-        for layer in layers:
-            for strip in layer.strips:
-                for bag in getattr(strip, "channelbags", []):
-                    yield from bag.fcurves
-    elif hasattr(action, "fcurves"):
-        yield from action.fcurves
-
-
-def align_gltf_time(actions, fps, frame_start):
-    """glTF time 0 is the shot's first frame, but Blender's glTF importer puts time t at
-    frame t·fps·fps_base (from frame 0, and with fps_base multiplied, not divided). Moves
-    every imported key to frame_start + t·fps."""
-    scene = bpy.context.scene
-    imported_rate = scene.render.fps * scene.render.fps_base
-    k = fps / imported_rate
-    for action in actions:
-        for fc in _fcurves(action):
-            kps = fc.keyframe_points
-            n = len(kps)
-            if not n:
-                continue
-            buf = np.empty(2 * n, dtype=np.float32)
-            kps.foreach_get("co", buf)
-            buf[0::2] = buf[0::2] * k + frame_start
-            kps.foreach_set("co", buf)
-            fc.update()  # sorts the keys and recomputes their handles
-
-
 def _supported(op, **kwargs):
     """Only the options this Blender's importer has (older ones lack some of 5.0's)."""
     props = op.get_rna_type().properties
     return {k: v for k, v in kwargs.items() if k in props}
 
 
-def _import_file(path, fmt):
+def _import_file(path, fmt, scene, fps, frame_start, parsed=None):
     if fmt == "USD":
         op = bpy.ops.wm.usd_import
         kwargs = _supported(op, set_frame_range=False, import_cameras=False,
@@ -167,6 +136,11 @@ def _import_file(path, fmt):
     else:
         op = bpy.ops.import_scene.gltf
         kwargs = _supported(op, import_scene_as_collection=False, import_scene_extras=True)
+        with gltf_hooks.importing(scene, fps, frame_start, parsed):
+            result = op(filepath=path, **kwargs)
+        if "FINISHED" not in result:
+            raise ImportFailed(f"Blender could not import {os.path.basename(path)}")
+        return
     result = op(filepath=path, **kwargs)
     if "FINISHED" not in result:
         raise ImportFailed(f"Blender could not import {os.path.basename(path)}")
@@ -204,21 +178,27 @@ def _adopt_stray_collections(staging, new_ids, view_layer):
         lc = _find_layer_collection(view_layer.layer_collection, coll)
         if lc is not None:
             lc.exclude = excluded
+    # Name lookups in a collection are linear: one set each, not one walk per object.
+    in_root = set(root.objects)
+    in_staging = set(staging.objects)
     for obj in [i for i in new_ids if isinstance(i, bpy.types.Object)]:
-        if obj.name in root.objects:
+        if obj in in_root:
             root.objects.unlink(obj)
-            if obj.name not in staging.objects:
+            if obj not in in_staging:
                 staging.objects.link(obj)
 
 
 def import_cache(context, shot_name, path, fmt, fps, frames, after=None, set_range=True):
     """Imports `path` into a new collection `shot_name` under the scene's collection.
 
-    The scene's fps and range are set first (glTF animation is converted with them). On
-    success the previous import of the shot is removed; on failure everything this import
-    created is removed, the previous import and the scene's timing are restored, and the
-    error is raised. `after(collection, objects)` runs inside the guarded section.
-    `set_range=False` leaves the scene's frame range alone (a bake of another range)."""
+    The scene's fps and range are set first (glTF animation is converted with them). The
+    previous import of the shot is removed once the new one is in (USD), or once the glTF
+    file has been read and checked, before its data-blocks are made (removing it after
+    them costs time quadratic in the bee count, see gltf_hooks.py). On failure everything
+    this import created is removed, the scene's timing is restored and so is the previous
+    import if it is still there, and the error is raised. `after(collection, objects)` runs
+    inside the guarded section. `set_range=False` leaves the scene's frame range alone (a
+    bake of another range)."""
     scene = context.scene
     saved = (scene.render.fps, scene.render.fps_base, scene.frame_start, scene.frame_end,
              scene.frame_current)
@@ -228,25 +208,35 @@ def import_cache(context, shot_name, path, fmt, fps, frames, after=None, set_ran
     old_names = _stash_names(previous)
     before = _snapshot()
     staging = None
+    dropped = []
+
+    def drop_previous():
+        remove_ids(previous)
+        dropped.append(True)
+        # Freed IDs' addresses may be reused by new ones: what existed is taken again.
+        before.clear()
+        before.update(_snapshot())
+        before["collections"].discard(staging)
+
     try:
         set_scene_timing(scene, fps, frames, set_range)
         staging = bpy.data.collections.new(shot_name)
         scene.collection.children.link(staging)
         layer = _find_layer_collection(view_layer.layer_collection, staging)
         view_layer.active_layer_collection = layer
-        _import_file(path, fmt)
+        _import_file(path, fmt, scene, fps, frames[0], drop_previous if previous else None)
         new = _new_ids(before)
         imported_objects = [o for o in new if isinstance(o, bpy.types.Object)]
         if not imported_objects:
             raise ImportFailed(f"{os.path.basename(path)} holds nothing to import")
         _adopt_stray_collections(staging, new, view_layer)
         if fmt != "USD":
-            align_gltf_time([i for i in new if isinstance(i, bpy.types.Action)], fps, frames[0])
+            gltf_hooks.play_from_strips(imported_objects)
         if after is not None:
             after(staging, imported_objects)
         for id_ in _new_ids(before):
             id_[SHOT_TAG] = shot_name
-    except BaseException:
+    except BaseException as e:
         remove_ids(_new_ids(before))
         _restore_names(old_names)
         (scene.render.fps, scene.render.fps_base, scene.frame_start, scene.frame_end,
@@ -255,11 +245,14 @@ def import_cache(context, shot_name, path, fmt, fps, frames, after=None, set_ran
             view_layer.active_layer_collection = saved_active
         except Exception:
             pass
+        if dropped and isinstance(e, Exception):
+            raise ImportFailed(f"{e} (the previous swarm had already been removed)") from e
         raise
     try:
         view_layer.active_layer_collection = saved_active
     except Exception:
         pass
-    remove_ids(previous)
+    if not dropped:
+        remove_ids(previous)
     staging.name = shot_name
     return staging

@@ -13,7 +13,8 @@
 #                                       # out/validation/ instead of docs/ (a quick look)
 #
 # Writes presets/mosquito_cage.toml, presets/mosquito_cage_zonal.toml,
-# docs/img/mosquito_validation.png, docs/img/mosquito_cage_fitness.png,
+# docs/img/mosquito_validation.png, docs/img/mosquito_cage_fitness.png (and .csv: its data,
+# which `beeswarm fitness-figure` draws again without calibrating), the zonal model's the same,
 # docs/validation_table.md, docs/validation_noise_table.md and out/validation/*.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -132,6 +132,19 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
     assert_eq!(text.matches("# calibrated").count(), 8, "{text}");
     assert!(text.contains("\nheading_lag = 0.06\n"), "{text}");
     assert!(dir.path().join("fitted.fitness.png").exists());
+    // The history beside the figure draws the same figure again, without calibrating.
+    let history = dir.path().join("fitted.fitness.csv");
+    let again = dir.path().join("again.png");
+    beeswarm::eval::calibrate::run_fitness_figure(&calibrate::FitnessFigureArgs {
+        history: history.clone(),
+        figure: Some(again.clone()),
+        name: None,
+    })
+    .unwrap();
+    assert_eq!(
+        std::fs::read(&again).unwrap(),
+        std::fs::read(dir.path().join("fitted.fitness.png")).unwrap()
+    );
     let first = text.clone();
 
     // Same seed, same preset (apart from the timing in the provenance).
@@ -200,4 +213,72 @@ fn calibrate_command_writes_a_loadable_preset_and_a_figure() {
         ..only
     };
     assert!(run_calibrate(&bad).is_err());
+}
+
+#[test]
+fn fitness_history_reads_back_exactly_and_bad_lines_are_located() {
+    use beeswarm::eval::ga::{GaResult, Generation};
+    let r = GaResult {
+        best_genes: vec![],
+        best_fitness: 0.8830123456789,
+        history: (0..5)
+            .map(|i| Generation {
+                index: i,
+                best: 0.5 + 0.1 * i as f64 / 3.0,
+                mean: 0.1 * (i as f64).sqrt(),
+                best_genes: vec![],
+            })
+            .collect(),
+        evaluations: 0,
+    };
+    let text = calibrate::history_csv(&r);
+    let back = calibrate::parse_history(&text, Path::new("h.csv")).unwrap();
+    assert_eq!(back.history.len(), 5);
+    for (a, b) in r.history.iter().zip(&back.history) {
+        assert_eq!(
+            (a.index, a.best.to_bits(), a.mean.to_bits()),
+            (b.index, b.best.to_bits(), b.mean.to_bits())
+        );
+    }
+    let f = |t: &str| {
+        calibrate::parse_history(t, Path::new("h.csv"))
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(f("gen,best\n").starts_with("h.csv:1: expected the header"));
+    let e = f("generation,best,mean\n1,0.5,0.4\n2,0.6\n");
+    assert!(e.starts_with("h.csv:3: expected 3 values"), "{e}");
+    let e = f("generation,best,mean\n1,0.5,0.4\n3,0.6,0.5\n");
+    assert!(
+        e.starts_with("h.csv:3: generation: expected 2, found 3"),
+        "{e}"
+    );
+    let e = f("generation,best,mean\n1,NaN,0.4\n");
+    assert!(
+        e.starts_with("h.csv:2: best: expected a finite fitness"),
+        "{e}"
+    );
+    assert!(f("generation,best,mean\n").contains("at least one generation"));
+}
+
+#[test]
+fn fitness_figure_command_refuses_a_bad_history_with_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad_fitness.csv");
+    std::fs::write(&bad, "generation,best,mean\n1,0.5,oops\n").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .arg("fitness-figure")
+        .arg(&bad)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{}:2: mean: expected a finite fitness, found `oops`",
+            bad.display()
+        )),
+        "{err}"
+    );
+    assert!(!dir.path().join("bad_fitness.png").exists());
 }

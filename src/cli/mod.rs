@@ -1,5 +1,5 @@
 //! The command line: `bake`, `check`, `bench`, `models`, `eval`, `calibrate`,
-//! `fastswarm-db`, `wedge`, `gather`. `main.rs` only calls
+//! `fitness-figure`, `fastswarm-db`, `wedge`, `gather`. `main.rs` only calls
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
@@ -29,6 +29,7 @@ pub enum Command {
     Models(models::ModelsArgs),
     Eval(crate::eval::EvalArgs),
     Calibrate(crate::eval::CalibrateArgs),
+    FitnessFigure(crate::eval::calibrate::FitnessFigureArgs),
     FastswarmDb(fastswarm_db::FastswarmDbArgs),
     Wedge(wedge::WedgeArgs),
     Gather(wedge::GatherArgs),
@@ -51,6 +52,7 @@ pub fn main() -> i32 {
         Command::Models(a) => models::run(a),
         Command::Eval(a) => crate::eval::run_eval(&a),
         Command::Calibrate(a) => crate::eval::run_calibrate(&a),
+        Command::FitnessFigure(a) => crate::eval::calibrate::run_fitness_figure(&a),
         Command::FastswarmDb(a) => fastswarm_db::run(a),
         Command::Wedge(a) => wedge::run(a),
         Command::Gather(a) => wedge::gather(a),

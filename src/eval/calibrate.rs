@@ -432,6 +432,7 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| args.out.with_extension("fitness.png"));
     crate::atomic::check_writable(&figure, "--figure")?;
+    crate::atomic::check_writable(&history_path(&figure), "--figure's history (.csv)")?;
     let shot = crate::shot::load(&args.shot)?;
     if shot.swarms.is_empty() {
         return Err(Error::input(format!(
@@ -553,6 +554,11 @@ pub fn run_calibrate(args: &CalibrateArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| args.out.with_extension("fitness.png"));
     fitness_figure(&result, &name)?.save_png(&fig)?;
+    let history = history_path(&fig);
+    let mut f = AtomicFile::create(&history)?;
+    f.write_all(history_csv(&result).as_bytes())
+        .map_err(|e| Error::io(&history, e))?;
+    f.commit()?;
     eprintln!(
         "best fitness q = {:.4} after {} generations ({seconds:.1} s)\nwrote {}\nwrote {}",
         result.best_fitness,
@@ -617,6 +623,144 @@ pub fn preset_toml(
         s += &format!("{} = {}{note}\n", spec.name, toml::Value::Float(v));
     }
     s
+}
+
+/// Where `calibrate` keeps the fitness history of a figure: beside it, `.csv` for `.png`.
+pub fn history_path(figure: &Path) -> PathBuf {
+    figure.with_extension("csv")
+}
+
+/// The header of a fitness history CSV.
+pub const HISTORY_HEADER: &str = "generation,best,mean";
+
+/// Best and mean fitness per generation (1-based) as CSV, every value written in the
+/// shortest form that reads back to the same `f64`, so a figure drawn again from it is
+/// the figure `calibrate` drew.
+pub fn history_csv(r: &GaResult) -> String {
+    let mut s = format!("{HISTORY_HEADER}\n");
+    for g in &r.history {
+        s += &format!("{},{},{}\n", g.index + 1, g.best, g.mean);
+    }
+    s
+}
+
+/// Reads a fitness history written by [`history_csv`]; `file` names it in errors, which
+/// give the line and what was expected.
+pub fn parse_history(text: &str, file: &Path) -> Result<GaResult> {
+    let bad =
+        |line: usize, what: String| Error::input(format!("{}:{line}: {what}", file.display()));
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim() == HISTORY_HEADER => {}
+        other => {
+            return Err(bad(
+                1,
+                format!(
+                    "expected the header `{HISTORY_HEADER}` of a fitness history, found `{}`",
+                    other.map(|(_, l)| l).unwrap_or("")
+                ),
+            ));
+        }
+    }
+    let mut history = Vec::new();
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let n = i + 1;
+        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+        if cols.len() != 3 {
+            return Err(bad(
+                n,
+                format!(
+                    "expected 3 values `generation,best,mean`, found {}",
+                    cols.len()
+                ),
+            ));
+        }
+        let generation: usize = cols[0].parse().map_err(|_| {
+            bad(
+                n,
+                format!("generation: expected a whole number, found `{}`", cols[0]),
+            )
+        })?;
+        if generation != history.len() + 1 {
+            return Err(bad(
+                n,
+                format!(
+                    "generation: expected {}, found {generation}",
+                    history.len() + 1
+                ),
+            ));
+        }
+        let value = |k: usize, key: &str| -> Result<f64> {
+            match cols[k].parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(bad(
+                    n,
+                    format!("{key}: expected a finite fitness, found `{}`", cols[k]),
+                )),
+            }
+        };
+        history.push(Generation {
+            index: generation - 1,
+            best: value(1, "best")?,
+            mean: value(2, "mean")?,
+            best_genes: Vec::new(),
+        });
+    }
+    if history.is_empty() {
+        return Err(bad(2, "expected at least one generation".to_owned()));
+    }
+    let best_fitness = history.iter().map(|g| g.best).fold(0.0f64, f64::max);
+    Ok(GaResult {
+        best_genes: Vec::new(),
+        best_fitness,
+        history,
+        evaluations: 0,
+    })
+}
+
+/// Draws a calibration's fitness figure again from the history `calibrate` wrote beside
+/// it, without calibrating: e.g. after the charts changed.
+#[derive(clap::Args, Clone, Debug)]
+pub struct FitnessFigureArgs {
+    /// The fitness history (`<figure>.csv`, written by `calibrate` beside its figure).
+    #[arg(value_name = "HISTORY.csv")]
+    pub history: PathBuf,
+    /// The figure to write [default: the history's path with .png].
+    #[arg(long, value_name = "FIG.png")]
+    pub figure: Option<PathBuf>,
+    /// The preset name in the caption [default: the history's file stem without
+    /// `_fitness` or `.fitness`].
+    #[arg(long)]
+    pub name: Option<String>,
+}
+
+pub fn run_fitness_figure(args: &FitnessFigureArgs) -> Result<()> {
+    let figure = args
+        .figure
+        .clone()
+        .unwrap_or_else(|| args.history.with_extension("png"));
+    crate::atomic::check_writable(&figure, "--figure")?;
+    let bytes = crate::shot::read_bounded(&args.history)
+        .map_err(|e| Error::input(format!("cannot read {}: {e}", args.history.display())))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| Error::input(format!("{}: not UTF-8 text", args.history.display())))?;
+    let result = parse_history(&text, &args.history)?;
+    let name = args.name.clone().unwrap_or_else(|| {
+        let stem = args
+            .history
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        stem.trim_end_matches("_fitness")
+            .trim_end_matches(".fitness")
+            .to_owned()
+    });
+    fitness_figure(&result, &name)?.save_png(&figure)?;
+    eprintln!("wrote {}", figure.display());
+    Ok(())
 }
 
 /// Best and mean fitness per generation (like Fig. 10 of paper 000).

@@ -961,6 +961,63 @@ def test_gltf_bake_imports_the_swarm_once(scene, beeswarm_bin, tmp_path):
     check_swarm_against_csv("bltest", 40, lambda f: gltf_positions("bltest", f), tracks2, (3, 30))
 
 
+NTSC_GLTF = """
+[scene]
+name = "ntsc"
+fps = 23.976
+frames = [7, 30]
+seed = 3
+
+[[swarm]]
+name = "bees"
+count = 12
+preset = "nest"
+spawn = { shape = "box", center = [0.0, 1.0, 0.0], size = [0.4, 0.4, 0.4] }
+
+[output]
+gltf_layout = "parts"
+"""
+
+
+def test_gltf_import_plays_strips_at_the_shots_frames_and_rate(scene, beeswarm_bin, tmp_path):
+    """A shot at 23.976 fps starting at frame 7, parts layout: every bee plays the NLA strip
+    the importer made (no active action, no key moved), starting at the shot's first frame
+    at the shot's rate, and the hooks gave the action its frame range (constant-time
+    stashing). A glTF imported by hand afterwards is the importer's own business."""
+    shot = tmp_path / "shots" / "ntsc.toml"
+    shot.parent.mkdir()
+    shot.write_text(NTSC_GLTF)
+    assert run_bake(beeswarm_bin, "GLTF", shot_path=str(shot)) == {"FINISHED"}
+    assert (scene.render.fps, scene.frame_start, scene.frame_end) == (24, 7, 30)
+    assert abs(scene.render.fps / scene.render.fps_base - 23.976) < 1e-6
+    cache = tmp_path / "beeswarm_cache" / "ntsc"
+    tracks = read_tracks(cache / "ntsc.tracks.csv")
+    check_swarm_against_csv("ntsc", 12, lambda f: gltf_positions("ntsc", f), tracks, (7, 8, 19, 30))
+    animated = [o for o in bpy.data.collections["ntsc"].all_objects if o.animation_data]
+    assert len(animated) >= 12
+    for o in animated:
+        ad = o.animation_data
+        assert ad.action is None and len(ad.nla_tracks) == 1
+        track = ad.nla_tracks[0]
+        assert not track.mute and len(track.strips) == 1
+        assert track.strips[0].frame_start == 7.0
+    actions = [a for a in bpy.data.actions if a.get(importer.SHOT_TAG) == "ntsc"]
+    assert len(actions) == 1 and actions[0].use_frame_range
+    assert tuple(actions[0].frame_range) == pytest.approx((0.0, 23.0), abs=1e-3)
+    # Keys stay where the importer put them (glTF time x rate), none moved by the add-on.
+    keys = {round(k.co.x, 3) for layer in actions[0].layers for strip in layer.strips
+            for bag in strip.channelbags for fc in bag.fcurves for k in fc.keyframe_points}
+    assert min(keys) == 0.0 and max(keys) == pytest.approx(23.0, abs=1e-3)
+
+    # The user's own glTF import, the add-on enabled: an active action as usual, no range.
+    bpy.ops.import_scene.gltf(filepath=str(cache / "ntsc.glb"))
+    mine = bpy.context.selected_objects
+    assert mine and all(o.get(importer.SHOT_TAG) is None for o in mine)
+    own = [o for o in mine if o.animation_data]
+    assert own and all(o.animation_data.action is not None for o in own)
+    assert not own[0].animation_data.action.use_frame_range
+
+
 # ---------------------------------------------------------------------------------------
 # The panel (drawn into a recording stand-in for UILayout: headless Blender has no UI)
 

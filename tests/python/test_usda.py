@@ -210,6 +210,46 @@ def test_prototype_has_materials_normals_and_bands(baked):
         np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
 
 
+@pytest.mark.parametrize("mode", ["single", "flap"])
+def test_material_network_follows_the_usdpreviewsurface_spec(baked, mode):
+    """What usdview/Storm, Karma and Omniverse read of the materials, checked against the
+    UsdPreviewSurface definition usd-core ships (Sdr, `usdShaders`), since none of those
+    renderers runs here: every material's surface is a UsdPreviewSurface's `surface`
+    output; every authored input is one the definition declares, with its type, in the
+    spec's range; translucent wings use `opacity` with the default threshold 0 (blended,
+    not cut out) and every opaque part has opacity 1."""
+    from pxr import Sdr, UsdShade
+    node = Sdr.Registry().GetShaderNodeByIdentifier("UsdPreviewSurface")
+    assert node is not None, "usd-core without the UsdPreviewSurface definition"
+    unit_range = {"diffuseColor", "metallic", "roughness", "opacity", "clearcoat",
+                  "clearcoatRoughness", "occlusion", "specularColor", "emissiveColor"}
+    stage = open_stage(baked[mode])
+    materials = [UsdShade.Material(p) for p in stage.Traverse() if p.IsA(UsdShade.Material)]
+    assert sorted(m.GetPrim().GetName() for m in materials) == ["bee_black", "bee_wing", "bee_yellow"]
+    for m in materials:
+        sources = m.GetSurfaceOutput().GetConnectedSources()[0]
+        assert len(sources) == 1, m.GetPath()
+        shader = UsdShade.Shader(sources[0].source.GetPrim())
+        assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
+        assert sources[0].sourceName in node.GetShaderOutputNames()
+        assert sources[0].sourceName == "surface"
+        for inp in shader.GetInputs():
+            name = inp.GetBaseName()
+            spec = node.GetShaderInput(name)
+            assert spec is not None, f"{shader.GetPath()}: {name} is not a UsdPreviewSurface input"
+            assert inp.GetTypeName() == spec.GetTypeAsSdfType().GetSdfType(), (shader.GetPath(), name)
+            value = np.atleast_1d(np.array(inp.Get(), dtype=float))
+            if name in unit_range:
+                assert np.all((value >= 0.0) & (value <= 1.0)), (shader.GetPath(), name, value)
+        opacity = shader.GetInput("opacity").Get()
+        threshold = shader.GetInput("opacityThreshold")
+        assert not threshold or threshold.Get() == 0.0  # absent: the definition's 0
+        if m.GetPrim().GetName() == "bee_wing":
+            assert 0.0 < opacity < 0.5
+        else:
+            assert opacity == 1.0
+
+
 @pytest.mark.parametrize("mode", ["flap", "flap_clips"])
 def test_wings_flap_in_phase_groups(baked, mode):
     """Eight prototypes whose wings turn about their hinges once per frame, each group
