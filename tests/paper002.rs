@@ -241,7 +241,7 @@ fn fig5_males_that_see_the_female_chase_her() {
         println!(
             "t {:4.1} s: {:3.0} % of the males within r_res of her; males' mean speed {speed:.3} m/s, hers {:.3} m/s",
             k as f64 / f.fps(),
-            100.0 * near(f, k, at(k), r_res as f32),
+            100.0 * near(f, k, at(k), r_res),
             at(k + 1).distance(at(k)) as f64 * f.fps()
         );
     }
