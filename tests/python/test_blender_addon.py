@@ -652,7 +652,8 @@ def names(items):
 def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
     s = scene.beeswarm.swarms[0]
     assert names(props.model_items(s, bpy.context)) == \
-        ["bee", "curl", "brownian", "boids", "field", "fastswarm", "zonal"]
+        ["bee", "curl", "brownian", "boids", "field", "fastswarm", "zonal",
+         "butterfly"]
     expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
                                          text=True, check=True).stdout)
     for m in expected["models"]:
