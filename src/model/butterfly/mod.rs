@@ -27,7 +27,7 @@ use super::context::Context;
 use super::flight::{self, Avoidance, lag_blend};
 use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::{self, Rng, finite_or_zero};
-use crate::species::{Channel, HONEYBEE};
+use crate::species::{BUTTERFLY, Channel};
 use aerodynamics::{Flow, WingState, Wings};
 use glam::{Quat, Vec3};
 use maneuvering::{Angle, Window};
@@ -68,7 +68,7 @@ pub const BUTTERFLY_CHANNELS: [Channel; 8] = [
     Channel {
         name: "abdomen",
         unit: "deg",
-        doc: "θ_φ: abdomen rotation, degrees, about the body's lateral axis, tip up positive.",
+        doc: "θ_φ: abdomen rotation, degrees, in the body's plane of symmetry, tip up positive.",
     },
     Channel {
         name: "flap_hz",
@@ -187,7 +187,7 @@ impl Model for ButterflyModel {
         params: ButterflyParams::SPECS,
         presets: params::PRESETS,
         channels: &BUTTERFLY_CHANNELS,
-        species: &HONEYBEE,
+        species: &BUTTERFLY,
     };
 
     fn new(s: &SwarmSetup) -> Self {
