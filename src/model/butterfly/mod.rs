@@ -44,7 +44,7 @@ pub const GRAVITY: f32 = 9.81;
 const SPEED_GUARD: f32 = 5.0;
 
 /// What the butterfly model records per butterfly each frame.
-pub const BUTTERFLY_CHANNELS: [Channel; 8] = [
+pub const BUTTERFLY_CHANNELS: [Channel; 9] = [
     Channel {
         name: "thorax_pitch",
         unit: "deg",
@@ -85,6 +85,11 @@ pub const BUTTERFLY_CHANNELS: [Channel; 8] = [
         unit: "m/s",
         doc: "Speed of flight, metres per second.",
     },
+    Channel {
+        name: "cycle_speed",
+        unit: "m/s",
+        doc: "|u(t0)|: the speed at the start of the current flapping cycle, which Eq. 2-3 read, metres per second.",
+    },
 ];
 
 /// One butterfly. Only 4-byte fields: its bytes are its checkpoint (`sim::agent_bytes`).
@@ -108,6 +113,8 @@ pub struct Butterfly {
     pub s: f32,
     /// Eq. 12's window.
     pub window: Window,
+    /// |u(t0)|, m/s: the speed the current cycle's values came from.
+    pub cycle_speed: f32,
 }
 
 impl Agent for Butterfly {
@@ -232,6 +239,7 @@ impl Model for ButterflyModel {
             pitch_phase: rng.f32() * TAU,
             s,
             window: Window::new(),
+            cycle_speed: speed,
         }
     }
 
@@ -301,9 +309,11 @@ impl Model for ButterflyModel {
         let mut phase = b.phase + TAU * hz * dt;
         let mut s = b.s;
         let mut window = b.window;
+        let mut cycle_speed = b.cycle_speed;
         if phase >= TAU {
             phase = (phase - TAU).rem_euclid(TAU);
-            let raw = maneuvering::sigmoid(vel.length(), p.max_speed as f32);
+            cycle_speed = vel.length();
+            let raw = maneuvering::sigmoid(cycle_speed, p.max_speed as f32);
             s = window.next(raw, p.window as usize);
         }
         let pitch_hz = maneuvering::frequency(Angle::Pitch, b.s);
@@ -319,6 +329,7 @@ impl Model for ButterflyModel {
             pitch_phase,
             s,
             window,
+            cycle_speed,
         }
     }
 
@@ -342,5 +353,6 @@ impl Model for ButterflyModel {
         channels[5] = self.flap_hz(b.s);
         channels[6] = b.phase / TAU;
         channels[7] = b.vel.length();
+        channels[8] = b.cycle_speed;
     }
 }

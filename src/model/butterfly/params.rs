@@ -14,7 +14,7 @@ crate::declare_params! {
         /// Wing span tip to tip, giving the blade elements' lever arms (not in the paper: about 6 cm).
         span: "m", 0.06, [1e-3, 2.0], "a span from 0.001 to 2 m";
         /// |u_max| of Eq. 2–3: the speed at which frequency and amplitude reach their ranges (not in the paper).
-        max_speed: "m/s", 2.0, [0.05, 50.0], "a speed from 0.05 to 50 m/s";
+        max_speed: "m/s", 1.5, [0.05, 50.0], "a speed from 0.05 to 50 m/s";
         /// Lowest flap frequency: a cycle must end for Eq. 2 to be re-evaluated (not in the paper; Eq. 2 tends to 0 at rest).
         min_flap_hz: "Hz", 2.0, [0.1, 100.0], "a frequency from 0.1 to 100 Hz";
         /// k of Eq. 12: how many earlier flapping cycles the sliding window smooths over.
@@ -23,14 +23,14 @@ crate::declare_params! {
         air_density: "kg/m³", 1.225, [0.0, 10.0], "a density from 0 to 10 kg/m³";
         /// η of Eq. 7: magnitude of the vortex force, read as an acceleration (m/s² per unit noise slope).
         eta: "m²/s²", 3.66, [0.0, 1000.0], "a gain from 0 to 1000";
-        /// gain_x = gain_z of Eq. 7: horizontal size of the vortices.
-        gain_xz: "m", 22.0, [1e-3, 1000.0], "a length from 0.001 to 1000 m";
-        /// gain_y of Eq. 7: vertical size of the vortices.
-        gain_y: "m", 5.5, [1e-3, 1000.0], "a length from 0.001 to 1000 m";
+        /// gain_x = gain_z of Eq. 7: horizontal size of the vortices (the paper's 22 is in unstated scene units; 22 m leaves butterflies at a flower still).
+        gain_xz: "m", 2.0, [1e-3, 1000.0], "a length from 0.001 to 1000 m";
+        /// gain_y of Eq. 7: vertical size of the vortices (the paper's 5.5, a quarter of gain_x as in the paper).
+        gain_y: "m", 0.5, [1e-3, 1000.0], "a length from 0.001 to 1000 m";
         /// L of Eq. 8: the farthest a butterfly sees an attraction point.
         sense_length: "m", 4.5, [1e-3, 10000.0], "a length from 0.001 to 10000 m";
-        /// The force Eq. 8's R(d) stands for at d = 1, divided by m (not in the paper: 4 mN, a monarch's weight, so that attraction can hold it up).
-        attraction_force: "N", 8e-3, [0.0, 1.0], "a force from 0 to 1 N";
+        /// The force Eq. 8's R(d) stands for at d = 1, divided by m (not in the paper: 16 mN, four times a monarch's weight, so that attraction holds it near its target).
+        attraction_force: "N", 16e-3, [0.0, 1.0], "a force from 0 to 1 N";
         /// 1: the nearest other butterfly within L is an attraction point too (chasing, Sec. 7.1); 0: only the targets.
         chase: "1", 0.0, [0.0, 1.0], "0 (off) or 1 (on)";
         /// A gust added to the shot's wind between gust_start and gust_end, x component (not in the paper's equations: its Fig. 10).
