@@ -198,35 +198,33 @@ impl Wings {
     pub fn force(&self, w: &WingState, flow: &Flow) -> Vec3 {
         // Rotations now and a moment ago, for each element's velocity from the wing's turn.
         const H: f32 = 1e-3;
-        let mut total = Vec3::ZERO;
+        // Everything in the body frame, the left wing as the mirror image of the right one
+        // in mirrored air: Eq. 4–5 use only dot products and projections, so mirroring
+        // the air and then the force back is exact, and the right wing's geometry serves
+        // both sides.
+        let mirror = Vec3::new(1.0, 1.0, -1.0);
+        let to_body = flow.orientation.inverse();
+        let air = to_body * (flow.wind - flow.velocity);
+        let air_mirrored = air * mirror;
+        let (mut right, mut left) = (Vec3::ZERO, Vec3::ZERO);
         for wing in &self.right {
-            let now = wing.rotation(w.flap, w.feather, w.sweep);
-            let before = wing.rotation(
+            let now = glam::Mat3::from_quat(wing.rotation(w.flap, w.feather, w.sweep));
+            let before = glam::Mat3::from_quat(wing.rotation(
                 w.flap - w.flap_rate * H,
                 w.feather - w.feather_rate * H,
                 w.sweep - w.sweep_rate * H,
-            );
-            let normal = now * Vec3::Y;
-            let span = now * Vec3::Z;
+            ));
+            let turn = (now - before) * (1.0 / H);
+            let (normal, span) = (now.y_axis, now.z_axis);
             for e in &wing.elements {
-                let r = e.at * flow.span;
-                let v_body = (now * r - before * r) / H;
+                let v_turn = turn * (e.at * flow.span);
                 // Each side carries half the area.
                 let area = 0.5 * e.area * flow.area;
-                for mirror in [Vec3::ONE, Vec3::new(1.0, 1.0, -1.0)] {
-                    let to_world = |v: Vec3| flow.orientation * (v * mirror);
-                    let v_elem = flow.velocity + to_world(v_body);
-                    total += element_force(
-                        flow.wind - v_elem,
-                        to_world(normal),
-                        to_world(span),
-                        area,
-                        flow.density,
-                    );
-                }
+                right += element_force(air - v_turn, normal, span, area, flow.density);
+                left += element_force(air_mirrored - v_turn, normal, span, area, flow.density);
             }
         }
-        total
+        flow.orientation * (right + left * mirror)
     }
 }
 
