@@ -21,6 +21,7 @@
 
 use super::maneuvering::{Angle, angle, angle_rate};
 use crate::math::normalize_or;
+use crate::species::butterfly::{FORE_HINGE, HIND_BACK_DEG, HIND_HINGE};
 use glam::{Quat, Vec3};
 
 /// C_l(α), α in degrees (Fig. 6 with the quadratic coefficient read as −0.00095953).
@@ -41,8 +42,6 @@ pub fn drag_coefficient(alpha_deg: f32) -> f32 {
 pub const ELEMENTS: usize = 4;
 /// Share of the wing area on the forewings (the rest on the hindwings).
 const FORE_SHARE: f32 = 0.55;
-/// Hindwings at rest point this far back from the body's side, degrees.
-const HIND_REST_BACK_DEG: f32 = 35.0;
 
 /// One strip of a wing, in the wing frame (span +Z, chord forward +X, upper side +Y) of a
 /// right wing, for a butterfly of span 1 m and wing area 1 m².
@@ -54,7 +53,8 @@ struct Element {
     area: f32,
 }
 
-/// A right wing; the left one is its mirror image (z → −z).
+/// A right wing; the left one is its mirror image (z → −z). Hinges and the hindwings' rest
+/// angle are the drawn butterfly's (`species::butterfly`).
 #[derive(Clone, Copy, Debug)]
 struct Wing {
     /// Hinge on the thorax, body frame, for span 1 m.
@@ -165,7 +165,7 @@ pub struct Flow {
 impl Wings {
     pub fn new() -> Self {
         let fore = Wing::new(
-            Vec3::new(0.06, 0.02, 0.04),
+            FORE_HINGE,
             Quat::IDENTITY,
             true,
             0.46,
@@ -174,8 +174,8 @@ impl Wings {
             FORE_SHARE,
         );
         let hind = Wing::new(
-            Vec3::new(-0.02, 0.01, 0.04),
-            Quat::from_rotation_y(-HIND_REST_BACK_DEG.to_radians()),
+            HIND_HINGE,
+            Quat::from_rotation_y(-HIND_BACK_DEG.to_radians()),
             false,
             0.34,
             0.36,

@@ -356,3 +356,13 @@ impl Model for ButterflyModel {
         channels[8] = b.cycle_speed;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_drawn_butterfly_is_driven_by_recorded_channels() {
+        BUTTERFLY.check(&BUTTERFLY_CHANNELS).unwrap();
+    }
+}
