@@ -707,7 +707,7 @@ def test_models_are_asked_once_per_binary(with_binary, monkeypatch):
     monkeypatch.setattr(binary.subprocess, "run", lambda *a, **k: calls.append(a) or real(*a, **k))
     for _ in range(5):
         doc, reason = binary.models(with_binary)
-        assert reason == "" and len(doc["models"]) == 7
+        assert reason == "" and len(doc["models"]) == 8
     assert len(calls) == 1, "the menu callbacks run on every redraw: one query per binary"
 
 
