@@ -755,7 +755,7 @@ fn bad_bench_options_name_the_option() {
         ),
         (
             &["--model", "wasp"][..],
-            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\", \"fastswarm\", \"zonal\", found \"wasp\"",
+            "error: --model: expected one of \"bee\", \"curl\", \"brownian\", \"boids\", \"field\", \"fastswarm\", \"zonal\", \"butterfly\", found \"wasp\"",
         ),
         (
             &["--model", "boids", "--preset", "nest"][..],

@@ -3,7 +3,7 @@
 //! bees in a 5 cm cube) so that the bounded-neighbour search's ring walk is covered too, a
 //! swarm of paper 001's field model (its path field, noise and minimum distance
 //! enforcement) and a dense zonal swarm (paper 002: ORCA, escape angles drawn per agent)
-//! meeting a predator.
+//! meeting a predator, and paper 004's butterflies chasing each other in the rain.
 
 use std::path::Path;
 use std::process::Command;
@@ -48,6 +48,12 @@ count = 300
 model = "zonal"
 preset = "escape"
 spawn = { shape = "box", center = [-0.6, 1.5, 0], size = [0.2, 0.2, 0.2] }
+[[swarm]]
+name = "butterflies"
+count = 40
+model = "butterfly"
+spawn = { shape = "box", center = [0, 1.5, -0.5], size = [0.6, 0.3, 0.6] }
+params = { chase = 1, rain_rate = 10 }
 [[target]]
 type = "predator"
 keys = [{ frame = 1, position = [-1.2, 1.5, 0] }, { frame = 25, position = [0, 1.5, 0] }]
@@ -60,7 +66,7 @@ height = 2
 [[target]]
 type = "nest"
 position = [0, 1, 0]
-swarms = ["bees", "boids", "field"]
+swarms = ["bees", "boids", "field", "butterflies"]
 "#;
 
 fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {

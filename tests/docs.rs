@@ -38,7 +38,8 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
             "boids",
             "field",
             "fastswarm",
-            "zonal"
+            "zonal",
+            "butterfly"
         ]
     );
     assert_eq!(names(model("field"), "channels"), ["speed", "cost", "mde"]);

@@ -59,7 +59,15 @@ fn scene(case: u64) -> String {
     let mut rng = Rng::new(2026, case, 0);
     let model = ["bee", "brownian", "boids", "curl", "fastswarm"][(rng.f32() * 5.0) as usize % 5];
     // Cases from 200 on fly paper 001's field model, towards a goal across the scene.
-    let model = if case >= 200 { "field" } else { model };
+    // Cases from 240 on are paper 004's butterflies (gravity, wind gusts and rain push
+    // them at the ground and the obstacles), chasing each other and a target.
+    let model = if case >= 240 {
+        "butterfly"
+    } else if case >= 200 {
+        "field"
+    } else {
+        model
+    };
     // Speeds up to the documented 50 m/s, the noise lattice down to its 1 mm minimum.
     let speed = if rng.f32() < 0.5 {
         rng.range(0.5, 3.0)
@@ -82,6 +90,12 @@ fn scene(case: u64) -> String {
                 speed * scale
             )
         }
+        "butterfly" => format!(
+            "{{ max_speed = {:.2}, rain_rate = 20, rain_kick = {:.2}, chase = 1, gust_x = {:.2}, gust_end = 0.5 }}",
+            speed.min(10.0),
+            rng.range(0.1, 3.0),
+            rng.range(-5.0, 5.0)
+        ),
         // Flies recorded velocities: no speed to set.
         "fastswarm" => format!("{{ noise_cell = {:.4} }}", rng.range(0.001, 0.2)),
         _ => format!("{{ speed = {speed:.2} }}"),
@@ -93,7 +107,7 @@ fn scene(case: u64) -> String {
     for _ in 0..1 + (rng.f32() * 5.0) as usize {
         src += &format!("[[obstacle]]\n{}\n", obstacle(&mut rng));
     }
-    if model == "field" {
+    if model == "field" || model == "butterfly" {
         src += "[[target]]\nposition = [0.9, 1.2, -0.9]\n";
     }
     src
@@ -103,7 +117,7 @@ fn scene(case: u64) -> String {
 fn no_body_is_ever_inside_an_obstacle() {
     let mut checked = 0usize;
     let mut worst = f32::INFINITY;
-    for case in 0..240 {
+    for case in 0..270 {
         let src = scene(case);
         // A scene whose spawn box lies wholly inside obstacles is refused, as documented.
         let Ok(shot) = beeswarm::shot::parse(

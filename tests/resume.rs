@@ -6,9 +6,10 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-/// Six models (a bee swarm with its channels, a boids flock, Brownian flyers whose
+/// Seven models (a bee swarm with its channels, a boids flock, Brownian flyers whose
 /// random kicks depend on the step count, paper 001's field insects, paper 002's zonal
-/// insects escaping a predator, paper 003's fastswarm insects), obstacles and targets.
+/// insects escaping a predator, paper 003's fastswarm insects, paper 004's butterflies in
+/// the rain, mid-window of Eq. 12), obstacles and targets.
 const SHOT: &str = r#"
 [scene]
 name = "resume"
@@ -45,6 +46,12 @@ name = "mosquitoes"
 model = "fastswarm"
 count = 30
 spawn = { shape = "box", center = [1.0, 1.5, -1.0], size = [0.5, 0.5, 0.5] }
+[[swarm]]
+name = "monarchs"
+model = "butterfly"
+count = 10
+params = { rain_rate = 5 }
+spawn = { shape = "box", center = [0.0, 1.5, 1.0], size = [0.5, 0.5, 0.5] }
 [[target]]
 type = "predator"
 name = "bat"

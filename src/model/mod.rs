@@ -14,6 +14,7 @@
 pub mod bee;
 pub mod boids;
 pub mod brownian;
+pub mod butterfly;
 pub mod collision;
 pub mod context;
 pub mod curl;
@@ -75,6 +76,7 @@ registry! {$
     Field => crate::model::field::FieldModel,
     Fastswarm => crate::model::fastswarm::FastswarmModel,
     Zonal => crate::model::zonal::ZonalModel,
+    Butterfly => crate::model::butterfly::ButterflyModel,
 }
 
 impl ModelKind {

@@ -48,7 +48,11 @@ macro_rules! plain {
     )*};
 }
 
-plain!(crate::model::bee::Bee, crate::model::flight::Flyer);
+plain!(
+    crate::model::bee::Bee,
+    crate::model::flight::Flyer,
+    crate::model::butterfly::Butterfly
+);
 
 /// Little-endian f32 words, read back in order.
 struct Words<'a>(&'a [u8]);

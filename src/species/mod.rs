@@ -11,8 +11,10 @@
 //! Y up, Z right; quaternions (x, y, z, w). This module sits below `sim`, `model`, `shot`
 //! and `export` and uses none of them.
 
+pub mod butterfly;
 pub mod honeybee;
 
+pub use butterfly::BUTTERFLY;
 pub use honeybee::{BEE_CHANNELS, HONEYBEE};
 
 use glam::Vec3;

@@ -652,7 +652,8 @@ def names(items):
 def test_model_and_preset_menus_come_from_the_binary(scene, with_binary):
     s = scene.beeswarm.swarms[0]
     assert names(props.model_items(s, bpy.context)) == \
-        ["bee", "curl", "brownian", "boids", "field", "fastswarm", "zonal"]
+        ["bee", "curl", "brownian", "boids", "field", "fastswarm", "zonal",
+         "butterfly"]
     expected = json.loads(subprocess.run([with_binary, "models", "--json"], capture_output=True,
                                          text=True, check=True).stdout)
     for m in expected["models"]:
@@ -706,7 +707,7 @@ def test_models_are_asked_once_per_binary(with_binary, monkeypatch):
     monkeypatch.setattr(binary.subprocess, "run", lambda *a, **k: calls.append(a) or real(*a, **k))
     for _ in range(5):
         doc, reason = binary.models(with_binary)
-        assert reason == "" and len(doc["models"]) == 7
+        assert reason == "" and len(doc["models"]) == 8
     assert len(calls) == 1, "the menu callbacks run on every redraw: one query per binary"
 
 

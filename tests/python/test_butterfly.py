@@ -1,0 +1,135 @@
+"""Paper 004's butterflies in the caches: a real bake of one butterfly checked by the Khronos
+glTF validator and usd-core's validators, and imported into Blender, where the wings must
+turn between frames by the recorded angles.
+
+glTF keys start at 0 s, so shot frame f is Blender frame f - start.
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from conftest import bake, read_tracks
+from test_gltf import VALIDATE, _missing
+
+SHOT = textwrap.dedent(
+    """\
+    [scene]
+    name = "butterfly_test"
+    fps = 30
+    frames = [1, 31]
+    substeps = 8
+    seed = 4
+
+    [[swarm]]
+    name = "monarchs"
+    count = 2
+    model = "butterfly"
+    spawn = { shape = "box", center = [0, 1.5, 0], size = [0.3, 0.3, 0.3] }
+    bee = { length = 0.025, radius = 0.005 }
+
+    [[target]]
+    type = "attractor"
+    position = [1, 2, 0]
+
+    [output]
+    formats = ["gltf", "usda", "csv"]
+    """
+)
+
+
+@pytest.fixture(scope="module")
+def baked(beeswarm_bin, tmp_path_factory):
+    out = tmp_path_factory.mktemp("butterfly")
+    bake(beeswarm_bin, SHOT, out)
+    return {
+        "gltf": out / "butterfly_test.gltf",
+        "usda": out / "butterfly_test.usda",
+        "csv": out / "butterfly_test.tracks.csv",
+    }
+
+
+def test_khronos_validator_finds_nothing(baked, node_modules):
+    env = dict(os.environ, BEESWARM_NODE_MODULES=node_modules, NODE_PATH=node_modules)
+    run = subprocess.run(["node", str(VALIDATE), str(baked["gltf"])], capture_output=True,
+                         text=True, env=env)
+    assert run.returncode == 0, run.stderr
+    issues = json.loads(run.stdout)["issues"]
+    summary = json.dumps(issues["messages"][:20], indent=1)
+    assert (issues["numErrors"], issues["numWarnings"], issues["numInfos"]) == (0, 0, 0), summary
+
+
+def test_usd_validators_pass_and_every_angle_is_a_primvar(baked):
+    pxr = pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom, UsdValidation
+
+    stage = Usd.Stage.Open(str(baked["usda"]))
+    validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+    assert UsdValidation.ValidationContext(validators).Validate(stage) == []
+    inst = next(p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer))
+    api = UsdGeom.PrimvarsAPI(inst)
+    tracks = read_tracks(baked["csv"])
+    for name in ["thorax_pitch", "flap", "feather", "sweep", "abdomen", "flap_hz"]:
+        pv = api.GetPrimvar(name)
+        assert pv, name
+        got = pv.Get(11)
+        assert got[0] == pytest.approx(tracks[0][11][name], abs=1e-3), name
+
+
+BLENDER = r"""
+import json, math, sys
+import bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+# The shot's 30 fps, so that Blender's frames are the shot's (the importer keys seconds).
+bpy.context.scene.render.fps = 30
+bpy.ops.import_scene.gltf(filepath=sys.argv[1])
+out = {}
+for f in json.loads(sys.argv[2]):
+    bpy.context.scene.frame_set(f)
+    row = {}
+    for o in bpy.data.objects:
+        if o.name.startswith("butterfly_000000_"):
+            part = o.name[len("butterfly_000000_"):]
+            q = o.matrix_local.to_quaternion()
+            row[part] = [q.w, q.x, q.y, q.z]
+            row[part + "_world"] = [list(r) for r in o.matrix_world]
+    out[f] = row
+print("RESULT " + json.dumps(out))
+"""
+
+
+def angle_deg(q):
+    return math.degrees(2.0 * math.acos(min(1.0, abs(q[0]))))
+
+
+def test_blender_turns_the_wings_by_the_recorded_angles(baked):
+    import importlib.util
+
+    if importlib.util.find_spec("bpy") is None:
+        _missing("bpy (Blender as a Python module)")
+    frames = list(range(0, 31, 3))
+    run = subprocess.run([sys.executable, "-c", BLENDER, str(baked["gltf"]), json.dumps(frames)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-4000:]
+    line = next(l for l in run.stdout.splitlines() if l.startswith("RESULT "))
+    got = json.loads(line[len("RESULT "):])
+    tracks = read_tracks(baked["csv"])
+    for f in frames:
+        row, rec = got[str(f)], tracks[0][f + 1]
+        # Each joint turns by its channel's angle about its axis (the angle of the node's
+        # local rotation is the channel's magnitude).
+        for part, channel in [("forewing_r_flap", "flap"), ("forewing_l_flap", "flap"),
+                              ("hindwing_r", "flap"), ("forewing_r", "feather"),
+                              ("forewing_r_sweep", "sweep"), ("abdomen", "abdomen")]:
+            assert angle_deg(row[part]) == pytest.approx(abs(rec[channel]), abs=0.05), (f, part)
+    # The wings move between frames in the world too.
+    worlds = [got[str(f)]["forewing_r_world"] for f in frames]
+    moved = [max(abs(a - b) for ra, rb in zip(w0, w1) for a, b in zip(ra[:3], rb[:3]))
+             for w0, w1 in zip(worlds, worlds[1:])]
+    assert min(moved) > 0.01, moved
+    flaps = [tracks[0][f + 1]["flap"] for f in frames]
+    assert max(flaps) - min(flaps) > 20.0, flaps
