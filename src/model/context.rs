@@ -54,6 +54,11 @@ impl NeighbourList {
         self.len = grid.nearest(p, radius, MAX_NEIGHBOURS, me, &mut self.idx) as u8;
     }
 
+    /// Empties the list (for a model that reads none).
+    pub(crate) fn clear(&mut self) {
+        self.len = 0;
+    }
+
     /// Global indices of the listed neighbours.
     #[inline]
     pub(crate) fn indices(&self) -> &[u32] {

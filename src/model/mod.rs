@@ -202,6 +202,13 @@ pub trait Model: Sized + Send + Sync {
     /// How far beyond body contact this model looks at neighbours, m (0: contacts only).
     fn reach(&self) -> f32;
 
+    /// Whether the step reads its neighbour list at all. A model that never does (paper
+    /// 004's butterflies outside a chase) spares the world the list, and a shot of such
+    /// models spares it the neighbour grid.
+    fn lists_neighbours(&self) -> bool {
+        true
+    }
+
     /// Spacing of the virtual particles this model wants on target bodies, m (`None`: it
     /// does not feel target bodies).
     fn target_particle_spacing(&self) -> Option<f32> {

@@ -54,6 +54,7 @@ trait Swarm: Send + Sync {
     /// Steps every agent into the second buffer and swaps (pass 2).
     fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     fn reach(&self) -> f32;
+    fn lists_neighbours(&self) -> bool;
     fn target_particle_spacing(&self) -> Option<f32>;
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
     /// Fills the frame record of this swarm.
@@ -98,6 +99,10 @@ where
         } = *w;
         let m = &self.model;
         let start = self.start;
+        if !self.lists_neighbours() {
+            lists.iter_mut().for_each(NeighbourList::clear);
+            return;
+        }
         lists
             .par_iter_mut()
             .zip(gathered.par_iter_mut())
@@ -153,6 +158,10 @@ where
 
     fn reach(&self) -> f32 {
         self.model.reach()
+    }
+
+    fn lists_neighbours(&self) -> bool {
+        M::GATHERS || self.model.lists_neighbours()
     }
 
     fn target_particle_spacing(&self) -> Option<f32> {
@@ -524,10 +533,13 @@ impl Simulation {
         ) {
             swarm.neighbour_records(rest, s.bee.mass, s.bee.radius);
         }
-        self.positions.clear();
-        self.positions
-            .par_extend(self.agents.par_iter().map(|a| a.pos));
-        self.grid.build(&self.positions, self.grid_cell);
+        // The grid only for shots where some model reads neighbours.
+        if self.swarms.iter().any(|s| s.lists_neighbours()) {
+            self.positions.clear();
+            self.positions
+                .par_extend(self.agents.par_iter().map(|a| a.pos));
+            self.grid.build(&self.positions, self.grid_cell);
+        }
 
         // Pass 1: neighbour lists and the models' gather passes, written in place.
         self.lists.resize(n, NeighbourList::default());

@@ -215,6 +215,10 @@ impl Model for ButterflyModel {
         }
     }
 
+    fn lists_neighbours(&self) -> bool {
+        self.p.chase >= 0.5
+    }
+
     fn reach(&self) -> f32 {
         if self.p.chase >= 0.5 {
             self.p.sense_length as f32
