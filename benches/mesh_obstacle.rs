@@ -105,7 +105,7 @@ fn main() {
         "[[obstacle]]\ntype = \"mesh\"\nfile = \"ball.obj\"\nposition = [0, 1, 0]\n",
     ));
     let load_s = t.elapsed().as_secs_f64();
-    let Shape::Mesh { mesh } = with_mesh.obstacles[0].shape else {
+    let Shape::Mesh { mesh } = &with_mesh.obstacles[0].shape else {
         unreachable!()
     };
     let with_sphere = parse(&shot_src(
@@ -125,7 +125,7 @@ fn main() {
         sum += mesh.query(*p).distance as f64;
     }
     let query_ns = t.elapsed().as_secs_f64() * 1e9 / n as f64;
-    let sphere = with_sphere.obstacles[0].shape;
+    let sphere = with_sphere.obstacles[0].shape.clone();
     let t = Instant::now();
     for p in &pts {
         sum += geometry::query(&sphere, *p).distance as f64;

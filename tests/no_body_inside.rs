@@ -360,7 +360,7 @@ fn no_body_is_ever_inside_a_mesh_obstacle() {
         let meshes: Vec<(Vec<[Vec3; 3]>, MeshMode)> = shot
             .obstacles
             .iter()
-            .map(|o| match o.shape {
+            .map(|o| match &o.shape {
                 Shape::Mesh { mesh } => (mesh.triangles().collect(), mesh.mode()),
                 _ => unreachable!("mesh scenes hold meshes only"),
             })

@@ -92,6 +92,9 @@ impl std::fmt::Display for MeshError {
 
 /// A mesh obstacle, ready for queries.
 pub struct Mesh {
+    /// Unique in the process (never reused, unlike an address once a mesh is freed): the
+    /// key of each thread's last-answer memo.
+    id: u64,
     mode: MeshMode,
     /// Solid: one per closed connected piece. Shell: one for the whole mesh.
     parts: Vec<Part>,
@@ -206,7 +209,9 @@ impl Mesh {
             return Err(MeshError::Empty);
         }
         let (min, max) = bounds(parts.iter().flat_map(|p| [p.min, p.max]));
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         let mut mesh = Mesh {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             mode,
             triangles: parts.iter().map(|p| p.mesh.num_triangles()).sum(),
             parts,
@@ -280,7 +285,7 @@ impl Mesh {
         // The models ask about the same point several times a step (vision, velocity
         // tuning, the sweep's start): the last exact answer of this thread is kept. A pure
         // function's memo, so results do not depend on threads or order.
-        let key = (self as *const Mesh as usize, p.to_array().map(f32::to_bits));
+        let key = (self.id, p.to_array().map(f32::to_bits));
         if let Some((k, q)) = LAST_EXACT.get()
             && k == key
         {
@@ -386,10 +391,10 @@ impl Mesh {
     }
 }
 
-type QueryKey = (usize, [u32; 3]);
+type QueryKey = (u64, [u32; 3]);
 
 thread_local! {
-    /// The last exact query of this thread: (mesh address, point bits) and its answer.
+    /// The last exact query of this thread: (mesh id, point bits) and its answer.
     static LAST_EXACT: std::cell::Cell<Option<(QueryKey, super::SurfaceQuery)>> =
         const { std::cell::Cell::new(None) };
 }

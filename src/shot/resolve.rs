@@ -9,6 +9,7 @@ use crate::error::ShotError;
 use crate::geometry::mesh::{Mesh, MeshError as MeshErr, MeshMode};
 use crate::model::ParamValues;
 use glam::Quat;
+use std::sync::{Arc, Weak};
 
 /// The longest scene or swarm name: names become file, node and prim names, and a file
 /// name (with the writers' suffixes) must stay under the 255 bytes file systems allow.
@@ -1019,7 +1020,7 @@ fn resolve_mesh(
     ro: &RawObstacle,
     base: &Path,
     rotation: Quat,
-) -> Result<&'static Mesh, ShotError> {
+) -> Result<Arc<Mesh>, ShotError> {
     let k = |key: &str| format!("obstacle[{i}].{key}");
     let file = cx.required(
         &k("file"),
@@ -1077,8 +1078,14 @@ fn resolve_mesh(
         .collect();
     let key = mesh_key(&vertices, &data.triangles, mode);
     let mut loaded = LOADED_MESHES.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, m)) = loaded.iter().find(|(k, _)| *k == key) {
-        return Ok(*m);
+    // Meshes no shot holds any more are gone; forget them.
+    loaded.retain(|(_, m)| m.strong_count() > 0);
+    if let Some(m) = loaded
+        .iter()
+        .find(|(k, _)| *k == key)
+        .and_then(|(_, m)| m.upgrade())
+    {
+        return Ok(m);
     }
     let mesh = Mesh::new(&vertices, &data.triangles, mode).map_err(|e| {
         let hint = match e {
@@ -1093,17 +1100,16 @@ fn resolve_mesh(
         err.hint = hint;
         err
     })?;
-    // Leaked on purpose: shapes are `Copy` and shared by every thread for the whole
-    // bake; each distinct mesh is built once per process (see LOADED_MESHES).
-    let mesh: &'static Mesh = Box::leak(Box::new(mesh));
-    loaded.push((key, mesh));
+    // Shared by the shot, its copies and the simulation; freed with the last of them.
+    let mesh = Arc::new(mesh);
+    loaded.push((key, Arc::downgrade(&mesh)));
     Ok(mesh)
 }
 
-/// Meshes built so far in this process, by [`mesh_key`]: resolving the same shot again
-/// (a check, then a bake; a test suite) reuses them instead of leaking another copy.
-static LOADED_MESHES: std::sync::Mutex<Vec<(u64, &'static Mesh)>> =
-    std::sync::Mutex::new(Vec::new());
+/// Meshes alive in this process, by [`mesh_key`]: resolving the same shot again while a
+/// copy is held (a check, then a bake; a wedge's variants) shares the mesh instead of
+/// building it again. Weak, so this list never keeps a mesh alive.
+static LOADED_MESHES: std::sync::Mutex<Vec<(u64, Weak<Mesh>)>> = std::sync::Mutex::new(Vec::new());
 
 /// A digest of the placed vertices, the triangles and the mode.
 fn mesh_key(vertices: &[Vec3], triangles: &[[u32; 3]], mode: MeshMode) -> u64 {
@@ -1291,4 +1297,39 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::geometry::Shape;
+
+    /// A mesh lives as long as a shot (or a simulation's copy) holds it, is shared while
+    /// it does, and is freed with the last holder.
+    #[test]
+    fn meshes_are_shared_while_held_and_freed_after() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("t.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+        )
+        .unwrap();
+        let src = "[[swarm]]\ncount = 2\n[[obstacle]]\ntype = \"mesh\"\nfile = \"t.obj\"\n";
+        let load = || super::super::parse(src, &dir.path().join("s.toml"), dir.path()).unwrap();
+        let mesh_of = |s: &crate::shot::Shot| match &s.obstacles[0].shape {
+            Shape::Mesh { mesh } => mesh.clone(),
+            other => panic!("{other:?}"),
+        };
+        let a = load();
+        let b = load();
+        let m = mesh_of(&a);
+        assert!(
+            std::sync::Arc::ptr_eq(&m, &mesh_of(&b)),
+            "built once, shared"
+        );
+        let weak = std::sync::Arc::downgrade(&m);
+        drop((a, b, m));
+        assert!(weak.upgrade().is_none(), "freed with its last holder");
+        // Built again when asked again.
+        assert_eq!(mesh_of(&load()).triangle_count(), 4);
+    }
 }
