@@ -6,6 +6,8 @@
 pub mod defaults;
 pub mod locate;
 pub mod mesh_file;
+mod mesh_gltf;
+mod mesh_ply;
 mod output;
 mod resolve;
 pub mod schema;

@@ -929,7 +929,15 @@ fn resolve_obstacle(
         "box" => &["center", "size", "rotation"],
         "capsule" | "shaft" => &["a", "b", "radius"],
         "cylinder" => &["center", "radius", "height", "rotation"],
-        "mesh" => &["file", "mode", "thickness", "position", "rotation", "scale"],
+        "mesh" => &[
+            "file",
+            "node",
+            "mode",
+            "thickness",
+            "position",
+            "rotation",
+            "scale",
+        ],
         _ => &["point", "normal"],
     };
     let present = [
@@ -947,6 +955,7 @@ fn resolve_obstacle(
         ("thickness", ro.thickness.is_some()),
         ("position", ro.position.is_some()),
         ("scale", ro.scale.is_some()),
+        ("node", ro.node.is_some()),
     ];
     if let Some((key, _)) = present.iter().find(|(key, p)| *p && !allowed.contains(key)) {
         return Err(cx.hint(
@@ -1025,7 +1034,7 @@ fn resolve_mesh(
     let file = cx.required(
         &k("file"),
         &ro.file,
-        "the mesh file, .obj or .stl, relative to the shot",
+        "the mesh file (.obj, .stl, .ply, .gltf or .glb), relative to the shot",
     )?;
     let mode_name = ro.mode.clone().unwrap_or_else(|| "solid".to_owned());
     let mode = match cx.one_of(&k("mode"), &mode_name, &["solid", "shell"])? {
@@ -1053,6 +1062,9 @@ fn resolve_mesh(
     let scale = cx.size(&k("scale"), ro.scale.unwrap_or([1.0; 3]))?;
     let path = base.join(&file);
     let located = |e: mesh_file::FileError| -> ShotError {
+        if ro.node.is_some() && e.message.starts_with(mesh_file::NODE_ERROR) {
+            return cx.err(&k("node"), format!("{}: {}", path.display(), e.message));
+        }
         let mut err = cx.err(&k("file"), e.message.clone());
         if e.line > 0 {
             // The problem is inside the mesh file: point there, and back to the shot.
@@ -1070,7 +1082,7 @@ fn resolve_mesh(
         }
         err
     };
-    let data = mesh_file::read(&path).map_err(located)?;
+    let data = mesh_file::read(&path, ro.node.as_deref()).map_err(located)?;
     let vertices: Vec<Vec3> = data
         .vertices
         .iter()

@@ -104,6 +104,8 @@ pub struct RawObstacle {
     /// Mesh obstacles: the mesh file (relative to the shot), how it is avoided, and its
     /// placement (scale, then rotation, then position).
     pub file: Option<String>,
+    /// glTF: the node whose meshes (with its children's) are the obstacle.
+    pub node: Option<String>,
     pub mode: Option<String>,
     pub thickness: Option<f64>,
     pub position: Option<V3>,
