@@ -1331,3 +1331,62 @@ fn mesh_files_missing_malformed_empty_or_open() {
         &["m.3ds: expected a .obj, .stl, .ply, .gltf or .glb mesh file"],
     );
 }
+
+#[test]
+fn a_velocity_database_is_read_and_its_errors_located() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let run_with = |model: &str, db: &str| {
+        std::fs::write(
+            p.join("shot.toml"),
+            format!("[[swarm]]\ncount = 3\nmodel = \"{model}\"\ndatabase = \"{db}\"\n"),
+        )
+        .unwrap();
+        beeswarm(p, &["check", "shot.toml"])
+    };
+    let run = run_with("fastswarm", "none.db");
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "shot.toml:4:12:",
+            "key `swarm[0].database`",
+            "none.db: cannot read it",
+        ],
+    );
+    std::fs::write(
+        p.join("bad.db"),
+        "# provenance\ndt = 0.02\n0.1,0.2,0.3,1,2\n",
+    )
+    .unwrap();
+    let run = run_with("fastswarm", "bad.db");
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "bad.db:3:1: key `swarm[0].database`: expected six numbers vx,vy,vz,ax,ay,az",
+            "hint: the velocity database of swarm[0], `database` at shot.toml:4",
+        ],
+    );
+    std::fs::write(p.join("few.db"), "dt = 0.02\n0.1,0.2,0.3,1,2,3\n").unwrap();
+    let run = run_with("fastswarm", "few.db");
+    assert_says(
+        &run.stderr,
+        &["few.db: 1 samples; a database needs at least 300"],
+    );
+    let run = run_with("bee", "few.db");
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["a bee swarm has no velocity database"]);
+    // The shipped database, copied beside the shot, is accepted.
+    std::fs::write(
+        p.join("good.db"),
+        std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/src/model/fastswarm/mosquito_db.csv"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let run = run_with("fastswarm", "good.db");
+    assert_eq!(run.code, 0, "{}", run.stderr);
+}

@@ -8,6 +8,7 @@ use super::*;
 use crate::error::ShotError;
 use crate::geometry::mesh::{Mesh, MeshError as MeshErr, MeshMode};
 use crate::model::ParamValues;
+use crate::model::fastswarm::database::Database;
 use glam::Quat;
 use std::sync::{Arc, Weak};
 
@@ -863,6 +864,11 @@ fn resolve_swarm(
         )),
     };
 
+    let database = match &rs.database {
+        None => None,
+        Some(file) => Some(resolve_database(cx, i, model, file, base)?),
+    };
+
     Ok(Swarm {
         name,
         count: count as usize,
@@ -873,7 +879,66 @@ fn resolve_swarm(
         variation,
         bee,
         bounds,
+        database,
     })
+}
+
+/// A swarm's `database` key: a FASTSWARM velocity database file (`beeswarm fastswarm-db`
+/// writes them), read and checked; errors inside the file point at its line, and back.
+fn resolve_database(
+    cx: &Ctx,
+    i: usize,
+    model: ModelKind,
+    file: &str,
+    base: &Path,
+) -> Result<Arc<Database>, ShotError> {
+    let key = format!("swarm[{i}].database");
+    if model != ModelKind::Fastswarm {
+        return Err(cx.hint(
+            &key,
+            format!("a {} swarm has no velocity database", model.name()),
+            "`database` names the recorded velocities of a model = \"fastswarm\" swarm",
+        ));
+    }
+    let path = base.join(file);
+    // A database is a few tens of kilobytes; a much larger file is not one.
+    const MAX_BYTES: u64 = 64 * 1024 * 1024;
+    let text = std::fs::File::open(&path)
+        .and_then(|f| {
+            let mut s = String::new();
+            std::io::Read::read_to_string(&mut std::io::Read::take(f, MAX_BYTES + 1), &mut s)
+                .map(|_| s)
+        })
+        .map_err(|e| cx.err(&key, format!("{}: cannot read it: {e}", path.display())))?;
+    if text.len() as u64 > MAX_BYTES {
+        return Err(cx.err(
+            &key,
+            format!(
+                "{}: larger than {} MB; not a velocity database",
+                path.display(),
+                MAX_BYTES >> 20
+            ),
+        ));
+    }
+    Database::parse_located(&text)
+        .map(Arc::new)
+        .map_err(|(line, message)| {
+            let mut err = cx.err(&key, message.clone());
+            if line > 0 {
+                err.hint = Some(format!(
+                    "the velocity database of swarm[{i}], `database` at {}:{}",
+                    err.file.display(),
+                    err.line
+                ));
+                err.file = path.clone();
+                err.line = line;
+                err.column = 1;
+                err.source_line = text.lines().nth(line - 1).map(str::to_owned);
+            } else {
+                err.message = format!("{}: {message}", path.display());
+            }
+            err
+        })
 }
 
 fn euler_deg(v: Vec3) -> Quat {

@@ -49,6 +49,8 @@ pub struct RawSwarm {
     pub bounds: Option<RawBounds>,
     /// Model parameter overrides, applied over the preset.
     pub params: Option<RawParams>,
+    /// FASTSWARM: the velocity database file (relative to the shot).
+    pub database: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

@@ -324,6 +324,7 @@ impl Simulation {
                 body: s.bee,
                 variation: s.variation,
                 bounds: s.bounds,
+                database: s.database.clone(),
                 targets: shot
                     .targets
                     .iter()

@@ -118,7 +118,7 @@ impl Energy {
     /// d_att1 away and a step moves |δ| ≤ 1 m/s × 0.02 s, so the neglected third-order
     /// term is below (k|δ|)³/6 of f: under 1 % for moves up to 2 cm at d_att1 = 8 cm.
     pub fn attraction(&mut self, w: f32, d_att1: f32, positions: &[Vec3]) {
-        let n = positions.len().min(MAX_NEIGHBOURS);
+        let n = positions.len();
         let (mut f, mut g, mut h) = (0.0f32, Vec3::ZERO, Mat3::ZERO);
         if w > 0.0 && n > 0 {
             let k = self.rho / d_att1;
