@@ -1364,7 +1364,7 @@ fn a_velocity_database_is_read_and_its_errors_located() {
     assert_says(
         &run.stderr,
         &[
-            "bad.db:3:1: key `swarm[0].database`: expected six numbers vx,vy,vz,ax,ay,az",
+            "bad.db:3:1: key `swarm[0].database`: expected six finite numbers",
             "hint: the velocity database of swarm[0], `database` at shot.toml:4",
         ],
     );
