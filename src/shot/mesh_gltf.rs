@@ -382,7 +382,7 @@ mod tests {
         )
         .unwrap();
         let mut j = json.into_bytes();
-        while j.len() % 4 != 0 {
+        while !j.len().is_multiple_of(4) {
             j.push(b' ');
         }
         let mut glb = Vec::new();
