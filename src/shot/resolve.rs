@@ -442,7 +442,13 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
     }
     let mut targets = Vec::new();
     for (i, rt) in raw.target.iter().enumerate() {
-        targets.push(resolve_target(&cx, i, rt, &swarms)?);
+        if rt.curve.is_some() || rt.samples.is_some() {
+            for point in curve_samples(&cx, i, rt)? {
+                targets.push(resolve_target(&cx, i, &point, &swarms)?);
+            }
+        } else {
+            targets.push(resolve_target(&cx, i, rt, &swarms)?);
+        }
     }
     let wind = match raw.wind.as_ref().and_then(|w| w.velocity) {
         Some(v) => cx.vec_in("wind.velocity", v, "m/s")?,
@@ -1205,6 +1211,78 @@ fn mesh_key(vertices: &[Vec3], triangles: &[[u32; 3]], mode: MeshMode) -> u64 {
     h.finish()
 }
 
+/// The most targets one `curve` expands into.
+const MAX_CURVE_SAMPLES: i64 = 1000;
+
+/// A target with `curve` and `samples`: one static target per sample, spread evenly by arc
+/// length along the polyline through the curve's points, in order (a closed curve, whose
+/// last point repeats its first, does not repeat it), named `<name>_00`, `<name>_01`, ….
+/// The key points of a FASTSWARM shape (paper 003 Sec. 5.1.2) drawn as a curve.
+fn curve_samples(cx: &Ctx, i: usize, rt: &RawTarget) -> Result<Vec<RawTarget>, ShotError> {
+    let k = |key: &str| format!("target[{i}].{key}");
+    let raw = cx.required(
+        &k("curve"),
+        &rt.curve,
+        "the curve's points [[x, y, z], ...] that `samples` spreads targets along",
+    )?;
+    if rt.position.is_some() || rt.keys.is_some() {
+        return Err(cx.hint(
+            &k("curve"),
+            "a target along a curve has no `position` or `keys`",
+            "each sample of the curve is a target at its own place",
+        ));
+    }
+    let pts: Vec<Vec3> = raw
+        .iter()
+        .map(|p| cx.vec(&k("curve"), *p))
+        .collect::<Result<_, _>>()?;
+    let samples = cx.required(&k("samples"), &rt.samples, "how many targets, 2 to 1000")?;
+    if !(2..=MAX_CURVE_SAMPLES).contains(&samples) {
+        return Err(cx.err(
+            &k("samples"),
+            format!("expected 2 to {MAX_CURVE_SAMPLES} samples, found {samples}"),
+        ));
+    }
+    let lengths: Vec<f32> = pts.windows(2).map(|w| w[0].distance(w[1])).collect();
+    let total: f32 = lengths.iter().sum();
+    if pts.len() < 2 || total <= 0.0 {
+        return Err(cx.err(
+            &k("curve"),
+            "expected at least two distinct points [[x, y, z], [x, y, z], ...]",
+        ));
+    }
+    let closed = pts[0] == pts[pts.len() - 1];
+    let n = samples as usize;
+    let step = total / if closed { n } else { n - 1 } as f32;
+    let name = rt
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("curve_{}", i + 1));
+    let mut out = Vec::with_capacity(n);
+    let (mut seg, mut start) = (0usize, 0.0f32);
+    for s in 0..n {
+        let at = (step * s as f32).min(total);
+        while seg + 1 < lengths.len() && start + lengths[seg] < at {
+            start += lengths[seg];
+            seg += 1;
+        }
+        let t = if lengths[seg] > 0.0 {
+            ((at - start) / lengths[seg]).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let p = pts[seg].lerp(pts[seg + 1], t);
+        out.push(RawTarget {
+            name: Some(format!("{name}_{s:02}")),
+            position: Some([p.x as f64, p.y as f64, p.z as f64]),
+            curve: None,
+            samples: None,
+            ..rt.clone()
+        });
+    }
+    Ok(out)
+}
+
 fn resolve_target(
     cx: &Ctx,
     i: usize,
@@ -1379,6 +1457,65 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
 #[cfg(test)]
 mod tests {
     use crate::geometry::Shape;
+
+    /// A target with `curve` and `samples` becomes that many targets, evenly spaced along
+    /// the polyline in order; a closed curve does not repeat its start; errors are located.
+    #[test]
+    fn a_curve_is_sampled_into_key_points() {
+        let dir = std::path::Path::new(".");
+        let parse = |t: &str| {
+            super::super::parse(
+                &format!(
+                    "[[swarm]]\ncount = 2\nmodel = \"fastswarm\"\npreset = \"shape\"\n[[target]]\n{t}"
+                ),
+                &dir.join("s.toml"),
+                dir,
+            )
+        };
+        // A closed unit square, 8 samples: its corners and the middles of its sides.
+        let shot = parse("name = \"sq\"\ncurve = [[0, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 1, 0]]\nsamples = 8\n").unwrap();
+        let got: Vec<glam::Vec3> = shot.targets.iter().map(|t| t.position_at(1.0)).collect();
+        let want = [
+            [0.0, 1.0],
+            [0.5, 1.0],
+            [1.0, 1.0],
+            [1.0, 1.5],
+            [1.0, 2.0],
+            [0.5, 2.0],
+            [0.0, 2.0],
+            [0.0, 1.5],
+        ];
+        assert_eq!(got.len(), 8);
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (*g - glam::Vec3::new(w[0], w[1], 0.0)).length() < 1e-5,
+                "{got:?}"
+            );
+        }
+        assert_eq!(shot.targets[3].name, "sq_03");
+        // Open: both ends are samples.
+        let shot = parse("curve = [[0, 1, 0], [2, 1, 0]]\nsamples = 3\n").unwrap();
+        assert_eq!(
+            shot.targets[2].position_at(1.0),
+            glam::Vec3::new(2.0, 1.0, 0.0)
+        );
+        let e = parse("curve = [[0, 1, 0], [2, 1, 0]]\nsamples = 1\n").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("expected 2 to 1000 samples, found 1"),
+            "{e}"
+        );
+        let e = parse("curve = [[0, 1, 0]]\nsamples = 4\n").unwrap_err();
+        assert!(
+            e.to_string().contains("at least two distinct points"),
+            "{e}"
+        );
+        let e = parse("curve = [[0, 1, 0], [1, 1, 0]]\n").unwrap_err();
+        assert!(e.to_string().contains("target[0].samples"), "{e}");
+        let e = parse("curve = [[0, 1, 0], [1, 1, 0]]\nsamples = 3\nposition = [0, 0, 0]\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("has no `position` or `keys`"), "{e}");
+    }
 
     /// A mesh lives as long as a shot (or a simulation's copy) holds it, is shared while
     /// it does, and is freed with the last holder.

@@ -127,6 +127,10 @@ pub struct RawTarget {
     pub normal: Option<V3>,
     pub swarms: Option<Vec<String>>,
     pub keys: Option<Vec<RawKey>>,
+    /// Points of a polyline (first = last: closed): the target stands for `samples` targets
+    /// spread evenly along it (FASTSWARM's key points, paper 003 Eq. 15).
+    pub curve: Option<Vec<V3>>,
+    pub samples: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]
