@@ -880,6 +880,10 @@ mod tests {
             "{q:?} {exact:?}"
         );
         assert!(q.normal.is_finite() && (q.normal.length() - 1.0).abs() < 1e-4);
+        // Near the mesh the normal follows the grid's distances: away from the surface.
+        if exact.distance < 2.0 * m.exact_band() {
+            assert!(q.normal.dot(exact.normal) > 0.5, "{q:?} {exact:?}");
+        }
         true
     }
 
