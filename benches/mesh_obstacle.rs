@@ -2,9 +2,13 @@
 //! triangle mesh against the same shot around the analytic sphere it approximates and
 //! with no obstacle; the mesh's build time and memory; and the cost of one query.
 //!
-//! `cargo bench --bench mesh_obstacle -- BEES FRAMES TRIANGLES`
+//! `cargo bench --bench mesh_obstacle -- BEES FRAMES TRIANGLES [none|sphere|mesh]`
 //! (e.g. `10000 24 100000`; set RAYON_NUM_THREADS for a fixed thread count). Prints one
-//! JSON line. Timings are wall-clock and vary with the machine and its load.
+//! JSON line. Timings are wall-clock and vary with the machine and its load. With a last
+//! argument only that shot is simulated (no query timings): for counting instructions,
+//! which a loaded machine does not disturb, e.g.
+//! `valgrind --tool=callgrind --toggle-collect='*Simulation*advance*' target/release/deps/mesh_obstacle-* 10000 6 100000 mesh`
+//! and the same with `none`: the ratio of their instruction counts is the mesh's cost.
 
 use beeswarm::geometry::{self, Shape};
 use beeswarm::sim::Simulation;
@@ -78,9 +82,15 @@ fn main() {
         eprintln!("mesh_obstacle: give BEES FRAMES TRIANGLES, e.g. 10000 24 100000");
         return;
     }
-    let [bees, frames, triangles] = &args[..] else {
-        eprintln!("usage: mesh_obstacle BEES FRAMES TRIANGLES");
-        std::process::exit(2);
+    let (bees, frames, triangles, only) = match &args[..] {
+        [b, f, t] => (b, f, t, None),
+        [b, f, t, o] if ["none", "sphere", "mesh"].contains(&o.as_str()) => {
+            (b, f, t, Some(o.as_str()))
+        }
+        _ => {
+            eprintln!("usage: mesh_obstacle BEES FRAMES TRIANGLES [none|sphere|mesh]");
+            std::process::exit(2);
+        }
     };
     let (bees, frames, triangles): (usize, usize, usize) = (
         bees.parse().unwrap(),
@@ -105,13 +115,25 @@ fn main() {
         "[[obstacle]]\ntype = \"mesh\"\nfile = \"ball.obj\"\nposition = [0, 1, 0]\n",
     ));
     let load_s = t.elapsed().as_secs_f64();
-    let Shape::Mesh { mesh } = with_mesh.obstacles[0].shape else {
+    let Shape::Mesh { mesh } = &with_mesh.obstacles[0].shape else {
         unreachable!()
     };
     let with_sphere = parse(&shot_src(
         "[[obstacle]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 1\n",
     ));
     let without = parse(&shot_src(""));
+    if let Some(only) = only {
+        let shot = match only {
+            "none" => &without,
+            "sphere" => &with_sphere,
+            _ => &with_mesh,
+        };
+        println!(
+            "{{\"only\": \"{only}\", \"bees\": {bees}, \"frames\": {frames}, \"steps_per_s\": {:.0}}}",
+            steps_per_second(shot)
+        );
+        return;
+    }
 
     // One query: points spread through the bees' box, deterministic.
     let n = 1_000_000;
@@ -125,7 +147,7 @@ fn main() {
         sum += mesh.query(*p).distance as f64;
     }
     let query_ns = t.elapsed().as_secs_f64() * 1e9 / n as f64;
-    let sphere = with_sphere.obstacles[0].shape;
+    let sphere = with_sphere.obstacles[0].shape.clone();
     let t = Instant::now();
     for p in &pts {
         sum += geometry::query(&sphere, *p).distance as f64;

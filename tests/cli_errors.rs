@@ -1277,13 +1277,116 @@ fn mesh_files_missing_malformed_empty_or_open() {
     .unwrap();
     let run = beeswarm(p, &["check", "shot.toml"]);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    // Another format: refused by name.
-    std::fs::write(p.join("m.ply"), "ply\n").unwrap();
+    // PLY: located at its line, and back to the shot.
     std::fs::write(
-        p.join("shot.toml"),
-        "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"mesh\"\nfile = \"m.ply\"\n",
+        p.join("m.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
     )
     .unwrap();
-    let run = beeswarm(p, &["check", "shot.toml"]);
-    assert_says(&run.stderr, &["m.ply: expected a .obj or .stl mesh file"]);
+    let mesh_shot = |file: &str, extra: &str| {
+        std::fs::write(
+            p.join("shot.toml"),
+            format!(
+                "[[swarm]]\ncount = 3\n[[obstacle]]\ntype = \"mesh\"\nfile = \"{file}\"\n{extra}"
+            ),
+        )
+        .unwrap();
+        let run = beeswarm(p, &["check", "shot.toml"]);
+        assert_eq!(run.code, 2, "{}", run.stderr);
+        run.stderr
+    };
+    assert_says(
+        &mesh_shot("m.ply", ""),
+        &[
+            "m.ply:13:1: key `obstacle[0].file`: face 1: vertex index 5 does not exist",
+            "hint: the mesh of obstacle[0], `file` at shot.toml:5",
+        ],
+    );
+    // glTF: a node that is not there is an error at the `node` key.
+    std::fs::write(
+        p.join("m.gltf"),
+        r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"name": "fence"}]}"#,
+    )
+    .unwrap();
+    assert_says(
+        &mesh_shot("m.gltf", "node = \"tree\"\n"),
+        &[
+            "key `obstacle[0].node`",
+            "no node named \"tree\" in the scene; its nodes: fence",
+        ],
+    );
+    assert_says(
+        &mesh_shot("m.gltf", ""),
+        &["m.gltf: the file has no triangles"],
+    );
+    std::fs::write(p.join("m.gltf"), "{\n\"asset\": 3\n}").unwrap();
+    assert_says(
+        &mesh_shot("m.gltf", ""),
+        &["m.gltf:2:1:", "invalid glTF JSON"],
+    );
+    // Another format: refused by name.
+    std::fs::write(p.join("m.3ds"), "x").unwrap();
+    assert_says(
+        &mesh_shot("m.3ds", ""),
+        &["m.3ds: expected a .obj, .stl, .ply, .gltf or .glb mesh file"],
+    );
+}
+
+#[test]
+fn a_velocity_database_is_read_and_its_errors_located() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let run_with = |model: &str, db: &str| {
+        std::fs::write(
+            p.join("shot.toml"),
+            format!("[[swarm]]\ncount = 3\nmodel = \"{model}\"\ndatabase = \"{db}\"\n"),
+        )
+        .unwrap();
+        beeswarm(p, &["check", "shot.toml"])
+    };
+    let run = run_with("fastswarm", "none.db");
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "shot.toml:4:12:",
+            "key `swarm[0].database`",
+            "none.db: cannot read it",
+        ],
+    );
+    std::fs::write(
+        p.join("bad.db"),
+        "# provenance\ndt = 0.02\n0.1,0.2,0.3,1,2\n",
+    )
+    .unwrap();
+    let run = run_with("fastswarm", "bad.db");
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "bad.db:3:1: key `swarm[0].database`: expected six finite numbers",
+            "hint: the velocity database of swarm[0], `database` at shot.toml:4",
+        ],
+    );
+    std::fs::write(p.join("few.db"), "dt = 0.02\n0.1,0.2,0.3,1,2,3\n").unwrap();
+    let run = run_with("fastswarm", "few.db");
+    assert_says(
+        &run.stderr,
+        &["few.db: 1 samples; a database needs at least 300"],
+    );
+    let run = run_with("bee", "few.db");
+    assert_eq!(run.code, 2);
+    assert_says(&run.stderr, &["a bee swarm has no velocity database"]);
+    // The shipped database, copied beside the shot, is accepted.
+    std::fs::write(
+        p.join("good.db"),
+        std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/src/model/fastswarm/mosquito_db.csv"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let run = run_with("fastswarm", "good.db");
+    assert_eq!(run.code, 0, "{}", run.stderr);
 }

@@ -3,7 +3,9 @@
 //! bees in a 5 cm cube) so that the bounded-neighbour search's ring walk is covered too, a
 //! swarm of paper 001's field model (its path field, noise and minimum distance
 //! enforcement) and a dense zonal swarm (paper 002: ORCA, escape angles drawn per agent)
-//! meeting a predator, and paper 004's butterflies chasing each other in the rain.
+//! meeting a predator, and paper 004's butterflies chasing each other in the rain. A mesh
+//! obstacle among the bees covers the mesh queries' per-thread memo and search bounds,
+//! which must not change an answer.
 
 use std::path::Path;
 use std::process::Command;
@@ -67,11 +69,53 @@ height = 2
 type = "nest"
 position = [0, 1, 0]
 swarms = ["bees", "boids", "field", "butterflies"]
+[[obstacle]]
+type = "mesh"
+file = "ball.obj"
+position = [0.2, 1, 0.5]
 "#;
+
+/// A UV sphere of radius 0.15 m, 1,920 triangles, as OBJ text.
+fn ball_obj() -> String {
+    let (rings, segs) = (20u32, 48u32);
+    let mut s = String::from("v 0 0.15 0\n");
+    for i in 1..rings {
+        let th = std::f64::consts::PI * i as f64 / rings as f64;
+        for j in 0..segs {
+            let ph = std::f64::consts::TAU * j as f64 / segs as f64;
+            s += &format!(
+                "v {} {} {}\n",
+                0.15 * th.sin() * ph.cos(),
+                0.15 * th.cos(),
+                0.15 * th.sin() * ph.sin()
+            );
+        }
+    }
+    s += "v 0 -0.15 0\n";
+    let bottom = 2 + (rings - 1) * segs;
+    let at = |i: u32, j: u32| 2 + (i - 1) * segs + j % segs;
+    for j in 0..segs {
+        s += &format!("f 1 {} {}\n", at(1, j + 1), at(1, j));
+        s += &format!("f {bottom} {} {}\n", at(rings - 1, j), at(rings - 1, j + 1));
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segs {
+            s += &format!(
+                "f {} {} {} {}\n",
+                at(i, j),
+                at(i, j + 1),
+                at(i + 1, j + 1),
+                at(i + 1, j)
+            );
+        }
+    }
+    s
+}
 
 fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {
     let shot = dir.join("det.toml");
     std::fs::write(&shot, SHOT).unwrap();
+    std::fs::write(dir.join("ball.obj"), ball_obj()).unwrap();
     let out = dir.join(format!("t{threads}-{}", seed.unwrap_or(0)));
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
     cmd.args([

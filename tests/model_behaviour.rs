@@ -125,7 +125,7 @@ position = [1.5, 1, 0]
 strength = 6
 "#;
     let sh = shot(src);
-    let wall = sh.obstacles[0].shape;
+    let wall = sh.obstacles[0].shape.clone();
     let r = sh.swarms[0].bee.radius * (1.0 + sh.swarms[0].variation.size);
     let mut closest = f32::INFINITY;
     let mut near = 0;

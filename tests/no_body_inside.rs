@@ -234,8 +234,94 @@ fn sheet_obj(rng: &mut Rng) -> String {
     s
 }
 
+/// The vertices and triangles of OBJ text (`v` lines, `f` lines of 3 or 4 corners).
+fn obj_parts(obj: &str) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let (mut v, mut t) = (Vec::new(), Vec::new());
+    for line in obj.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.first() {
+            Some(&"v") => v.push([1, 2, 3].map(|k| w[k].parse::<f32>().unwrap())),
+            Some(&"f") => {
+                let c: Vec<u32> = w[1..]
+                    .iter()
+                    .map(|x| x.parse::<u32>().unwrap() - 1)
+                    .collect();
+                for k in 1..c.len() - 1 {
+                    t.push([c[0], c[k], c[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    (v, t)
+}
+
+/// The same mesh as binary little-endian PLY.
+fn obj_to_ply(obj: &str) -> Vec<u8> {
+    let (v, t) = obj_parts(obj);
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar uint vertex_indices\nend_header\n",
+        v.len(),
+        t.len()
+    )
+    .into_bytes();
+    for p in &v {
+        p.iter().for_each(|c| b.extend(c.to_le_bytes()));
+    }
+    for f in &t {
+        b.push(3);
+        f.iter().for_each(|i| b.extend(i.to_le_bytes()));
+    }
+    b
+}
+
+/// The same mesh as glTF with its buffer in a data URI, placed by a node's translation
+/// (undone by the vertices, so the obstacle is where the OBJ's would be).
+fn obj_to_gltf(obj: &str) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let (v, t) = obj_parts(obj);
+    let mut buf = Vec::new();
+    for p in &v {
+        [p[0] - 0.25, p[1], p[2]]
+            .iter()
+            .for_each(|c| buf.extend(c.to_le_bytes()));
+    }
+    for f in &t {
+        f.iter().for_each(|i| buf.extend(i.to_le_bytes()));
+    }
+    let mut b64 = String::new();
+    for c in buf.chunks(3) {
+        let n = c
+            .iter()
+            .enumerate()
+            .fold(0u32, |a, (k, &x)| a | (x as u32) << (16 - 8 * k));
+        for k in 0..4 {
+            b64.push(if k <= c.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    let pos_len = 12 * v.len();
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+ "nodes": [{{"name": "blob", "translation": [0.25, 0, 0], "mesh": 0}}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+ "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{b64}"}}],
+ "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {pos_len}}}, {{"buffer": 0, "byteOffset": {pos_len}, "byteLength": {idx_len}}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": {nv}, "type": "VEC3", "min": [-9, -9, -9], "max": [9, 9, 9]}},
+  {{"bufferView": 1, "componentType": 5125, "count": {ni}, "type": "SCALAR"}}]}}"#,
+        len = buf.len(),
+        idx_len = 12 * t.len(),
+        nv = v.len(),
+        ni = 3 * t.len()
+    )
+}
+
 /// A scene of 1–3 mesh obstacles (closed blobs, some thin and flattened by the scale, and
-/// open sheets), randomly placed, written beside the shot in `dir`.
+/// open sheets), randomly placed, written beside the shot in `dir` as OBJ, binary PLY or
+/// glTF in turn (the same meshes whatever the file).
 fn mesh_scene(case: u64, dir: &std::path::Path) -> String {
     let mut rng = Rng::new(2026, case, 22);
     let model = ["bee", "brownian", "boids", "curl"][case as usize % 4];
@@ -249,14 +335,29 @@ fn mesh_scene(case: u64, dir: &std::path::Path) -> String {
          params = {{ speed = {speed:.2} }}\nspawn = {{ center = [0, 1, 0], size = [0.8, 0.8, 0.8] }}\n"
     );
     for k in 0..1 + (rng.f32() * 3.0) as usize {
-        let file = format!("m{case}_{k}.obj");
         let shell = rng.f32() < 0.3;
         let text = if shell {
             sheet_obj(&mut rng)
         } else {
             blob_obj(&mut rng, 10, 20)
         };
-        std::fs::write(dir.join(&file), text).unwrap();
+        let file = match (case as usize + k) % 3 {
+            0 => {
+                let f = format!("m{case}_{k}.obj");
+                std::fs::write(dir.join(&f), text).unwrap();
+                f
+            }
+            1 => {
+                let f = format!("m{case}_{k}.ply");
+                std::fs::write(dir.join(&f), obj_to_ply(&text)).unwrap();
+                f
+            }
+            _ => {
+                let f = format!("m{case}_{k}.gltf");
+                std::fs::write(dir.join(&f), obj_to_gltf(&text)).unwrap();
+                f
+            }
+        };
         // Non-uniform scale: now and then a blob squashed into a 5–20 mm board.
         let squash = if rng.f32() < 0.3 {
             rng.range(0.02, 0.08)
@@ -374,7 +475,7 @@ fn no_body_is_ever_inside_a_mesh_obstacle() {
         let meshes: Vec<(Vec<[Vec3; 3]>, MeshMode)> = shot
             .obstacles
             .iter()
-            .map(|o| match o.shape {
+            .map(|o| match &o.shape {
                 Shape::Mesh { mesh } => (mesh.triangles().collect(), mesh.mode()),
                 _ => unreachable!("mesh scenes hold meshes only"),
             })

@@ -75,7 +75,7 @@ fn deepest(track: &Track, shapes: &[Shape]) -> f32 {
 }
 
 fn obstacles(shot: &Shot) -> Vec<Shape> {
-    shot.obstacles.iter().map(|o| o.shape).collect()
+    shot.obstacles.iter().map(|o| o.shape.clone()).collect()
 }
 
 fn share(ps: &[Vec3], f: impl Fn(Vec3) -> bool) -> f64 {

@@ -232,7 +232,7 @@ pub fn summary(shot: &Shot) -> String {
     }
     let _ = writeln!(s, "  {} obstacle(s)", shot.obstacles.len());
     for o in &shot.obstacles {
-        let kind = match o.shape {
+        let kind = match &o.shape {
             Shape::Sphere { .. } => "sphere".to_owned(),
             Shape::Box { .. } => "box".to_owned(),
             Shape::Capsule { .. } => "capsule".to_owned(),

@@ -477,7 +477,7 @@ fn outline(s: &Shape) -> Vec<Vec3> {
         Shape::Plane { .. } => Vec::new(),
         // The vertices (of a large mesh every k-th triangle's, enough for its outline at
         // preview size).
-        Shape::Mesh { mesh } => {
+        Shape::Mesh { ref mesh } => {
             let stride = mesh.triangle_count().div_ceil(20_000).max(1);
             mesh.triangles().step_by(stride).flatten().collect()
         }

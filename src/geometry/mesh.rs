@@ -92,6 +92,9 @@ impl std::fmt::Display for MeshError {
 
 /// A mesh obstacle, ready for queries.
 pub struct Mesh {
+    /// Unique in the process (never reused, unlike an address once a mesh is freed): the
+    /// key of each thread's last-answer memo.
+    id: u64,
     mode: MeshMode,
     /// Solid: one per closed connected piece. Shell: one for the whole mesh.
     parts: Vec<Part>,
@@ -206,7 +209,9 @@ impl Mesh {
             return Err(MeshError::Empty);
         }
         let (min, max) = bounds(parts.iter().flat_map(|p| [p.min, p.max]));
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         let mut mesh = Mesh {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             mode,
             triangles: parts.iter().map(|p| p.mesh.num_triangles()).sum(),
             parts,
@@ -218,6 +223,9 @@ impl Mesh {
                 dims: [0; 3],
                 side: Vec::new(),
                 near: Vec::new(),
+                near_side: Vec::new(),
+                half: 0.0,
+                reach: 0.0,
                 band: f32::MAX,
             },
         };
@@ -273,30 +281,53 @@ impl Mesh {
                 normal: Vec3::Y,
             };
         }
-        let reach = self.far.classify(p);
-        if matches!(reach, Reach::FarOutside) {
-            return self.far_outside(p);
-        }
+        let reach = match self.far.classify(p) {
+            Reach::FarOutside => return self.far_outside(p),
+            Reach::Beyond { distance, normal } => {
+                return super::SurfaceQuery {
+                    distance,
+                    point: p - normal * distance,
+                    normal,
+                };
+            }
+            r => r,
+        };
         // The models ask about the same point several times a step (vision, velocity
-        // tuning, the sweep's start): the last exact answer of this thread is kept. A pure
+        // tuning, the sweep's start), and a body's next step starts where the contact
+        // guard last asked: each thread keeps its recent exact answers by point. A pure
         // function's memo, so results do not depend on threads or order.
-        let key = (self as *const Mesh as usize, p.to_array().map(f32::to_bits));
-        if let Some((k, q)) = LAST_EXACT.get()
-            && k == key
+        let key = (self.id, p.to_array().map(f32::to_bits));
+        let slot = memo_slot(&key);
+        if let Some(q) = MEMO.with_borrow(|m| m.get(slot).and_then(|e| (e.0 == key).then_some(e.1)))
         {
             return q;
         }
+        // Any point of the surface bounds the distance to it: the last closest point this
+        // thread found (most often the same body's, a step or a few millimetres back)
+        // narrows the hierarchy's search from the first node. The answer is the same
+        // with any bound at least the true distance (exact, first found on ties).
+        let bound = match LAST_POINT.get() {
+            Some((id, c)) if id == self.id => (p - c).length() * (1.0 + 1e-5) + 1e-6,
+            _ => f32::MAX,
+        };
         let q = match reach {
-            Reach::FarOutside => self.far_outside(p),
+            Reach::FarOutside | Reach::Beyond { .. } => self.far_outside(p),
             Reach::Near(within) => self
-                .exact(p, within)
+                .exact(p, within.min(bound))
                 .or_else(|| self.exact(p, f32::MAX))
                 .unwrap_or_else(|| self.far_outside(p)),
             Reach::FarInside => self
-                .exact(p, f32::MAX)
+                .exact(p, bound)
+                .or_else(|| self.exact(p, f32::MAX))
                 .unwrap_or_else(|| self.far_outside(p)),
         };
-        LAST_EXACT.set(Some((key, q)));
+        LAST_POINT.set(Some((self.id, q.point)));
+        MEMO.with_borrow_mut(|m| {
+            if m.is_empty() {
+                m.resize(MEMO_SLOTS, ((0, [0; 3]), q));
+            }
+            m[slot] = (key, q);
+        });
         q
     }
 
@@ -386,12 +417,27 @@ impl Mesh {
     }
 }
 
-type QueryKey = (usize, [u32; 3]);
+type QueryKey = (u64, [u32; 3]);
+
+/// Entries of each thread's memo of exact answers: one per body of a 16,000-bee swarm
+/// near a mesh, 0.8 MB a thread.
+const MEMO_SLOTS: usize = 1 << 14;
+
+/// Where `key` lives in the memo (direct-mapped: a newer answer replaces an older one).
+fn memo_slot(key: &QueryKey) -> usize {
+    let [x, y, z] = key.1.map(u64::from);
+    let h = (key.0 ^ x.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ y.wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+        .wrapping_add(z.wrapping_mul(0x1656_67B1_9E37_79F9));
+    ((h ^ (h >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9) >> 50) as usize & (MEMO_SLOTS - 1)
+}
 
 thread_local! {
-    /// The last exact query of this thread: (mesh address, point bits) and its answer.
-    static LAST_EXACT: std::cell::Cell<Option<(QueryKey, super::SurfaceQuery)>> =
-        const { std::cell::Cell::new(None) };
+    /// Recent exact answers of this thread, by (mesh id, point bits). Mesh ids start at
+    /// 1, so the empty entries' id 0 never matches.
+    static MEMO: std::cell::RefCell<Vec<(QueryKey, super::SurfaceQuery)>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+    /// The closest point of this thread's last exact answer, and its mesh.
+    static LAST_POINT: std::cell::Cell<Option<(u64, Vec3)>> = const { std::cell::Cell::new(None) };
 }
 
 /// Where a point stands, by the far-field grid.
@@ -399,6 +445,13 @@ enum Reach {
     /// Possibly within `reach` of the surface: ask the hierarchy, which finds the surface
     /// within this distance of the point (an upper bound from the near cell corners).
     Near(f32),
+    /// Outside and, by the near nodes around it, at least the exact band from the
+    /// surface: this lower bound of the distance (the distance is 1-Lipschitz), and the
+    /// direction in which the grid's distances grow.
+    Beyond {
+        distance: f32,
+        normal: Vec3,
+    },
     FarOutside,
     FarInside,
 }
@@ -418,6 +471,12 @@ struct FarField {
     side: Vec<i8>,
     /// Near nodes: the distance to the nearest triangle (thickness aside); far: ∞.
     near: Vec<f32>,
+    /// Near nodes: +1 outside, −1 inside (solid) or within the thickness (shell).
+    near_side: Vec<i8>,
+    /// Half the shell's thickness (0 for a solid): the distance is the triangles' less this.
+    half: f32,
+    /// Within this of a near node, the hierarchy was asked; far nodes are at least this far.
+    reach: f32,
     band: f32,
 }
 
@@ -528,6 +587,9 @@ impl FarField {
             dims,
             side,
             near,
+            near_side,
+            half,
+            reach,
             band: reach - cell * 3f32.sqrt(),
         }
     }
@@ -547,19 +609,56 @@ impl FarField {
         let (x, y, z) = (b.x as usize, b.y as usize, b.z as usize);
         let mut all = 0i32;
         let mut within = f32::INFINITY;
-        for k in 0..8 {
+        // The triangles' distance at the corners (a far outside corner: at least `reach`),
+        // and the largest lower bound they give at `p`.
+        let mut at = [0f32; 8];
+        let mut lower = f32::NEG_INFINITY;
+        let mut outside = true;
+        for (k, v) in at.iter_mut().enumerate() {
             let c = [x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2)];
             let i = c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2]);
             let s = self.side[i];
+            let corner = self.origin + self.cell * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+            let way = (p - corner).length();
             if s == 0 {
                 // The surface is within the corner's distance plus the way to it.
-                let corner =
-                    self.origin + self.cell * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
-                within = within.min(self.near[i] + (p - corner).length());
+                within = within.min(self.near[i] + way);
+                outside &= self.near_side[i] > 0;
+                *v = self.near[i];
+            } else {
+                outside &= s > 0;
+                *v = self.reach;
             }
+            lower = lower.max(*v - way);
             all += s as i32;
         }
         if within.is_finite() {
+            // A hair less for rounding.
+            let lower = lower * (1.0 - 1e-5) - 1e-6 - self.half;
+            if outside && lower >= self.band {
+                // Most bodies near a mesh are not at its surface: beyond the exact band
+                // they get the bound, and the trilinear gradient of the corners'
+                // distances as the normal, without asking the hierarchy.
+                let f = g - g.floor();
+                let w = |bit: usize, t: f32| if bit == 1 { t } else { 1.0 - t };
+                let mut grad = Vec3::ZERO;
+                for (k, v) in at.iter().enumerate() {
+                    let (bx, by, bz) = (k & 1, (k >> 1) & 1, k >> 2);
+                    let s = |bit: usize| if bit == 1 { 1.0 } else { -1.0 };
+                    grad += *v
+                        * Vec3::new(
+                            s(bx) * w(by, f.y) * w(bz, f.z),
+                            w(bx, f.x) * s(by) * w(bz, f.z),
+                            w(bx, f.x) * w(by, f.y) * s(bz),
+                        );
+                }
+                let centre = 0.5 * (self.origin + self.origin + self.cell * top);
+                let normal = super::dir_or(grad, super::dir_or(p - centre, Vec3::Y));
+                return Reach::Beyond {
+                    distance: lower,
+                    normal,
+                };
+            }
             // A hair more for rounding.
             return Reach::Near(within * (1.0 + 1e-5) + 1e-6);
         }
@@ -781,6 +880,10 @@ mod tests {
             "{q:?} {exact:?}"
         );
         assert!(q.normal.is_finite() && (q.normal.length() - 1.0).abs() < 1e-4);
+        // Near the mesh the normal follows the grid's distances: away from the surface.
+        if exact.distance < 2.0 * m.exact_band() {
+            assert!(q.normal.dot(exact.normal) > 0.5, "{q:?} {exact:?}");
+        }
         true
     }
 

@@ -9,8 +9,9 @@ pub mod mesh;
 use glam::{Quat, Vec3};
 pub use grid::Grid;
 
-/// Obstacle geometry. Rotations are body → world.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Obstacle geometry. Rotations are body → world. Cloning is cheap: a mesh is shared, not
+/// copied.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     Sphere {
         center: Vec3,
@@ -40,10 +41,10 @@ pub enum Shape {
         point: Vec3,
         normal: Vec3,
     },
-    /// A triangle mesh in world space (see [`mesh`]). Loaded once per shot and never
-    /// freed, so that shapes stay plain `Copy` values shared by every thread.
+    /// A triangle mesh in world space (see [`mesh`]). Shared by every thread and every
+    /// copy of the shot through the `Arc`, freed with the last of them.
     Mesh {
-        mesh: &'static mesh::Mesh,
+        mesh: std::sync::Arc<mesh::Mesh>,
     },
 }
 
@@ -113,7 +114,7 @@ pub fn signed_distance(shape: &Shape, p: Vec3) -> f32 {
 
 pub fn query(shape: &Shape, p: Vec3) -> SurfaceQuery {
     match *shape {
-        Shape::Mesh { mesh } => mesh.query(p),
+        Shape::Mesh { ref mesh } => mesh.query(p),
         Shape::Sphere { center, radius } => {
             let n = dir_or(p - center, Vec3::Y);
             SurfaceQuery {

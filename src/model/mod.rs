@@ -154,6 +154,9 @@ pub struct SwarmSetup<'a> {
     /// The shot's obstacles: what a model precomputes a field from once per shot (a
     /// distance or path field), besides querying them each step through the `Context`.
     pub obstacles: &'a [Shape],
+    /// The recorded velocity database a FASTSWARM swarm draws from (the shot's
+    /// `database`); `None`: the shipped mosquito database. Other models ignore it.
+    pub database: Option<std::sync::Arc<crate::model::fastswarm::database::Database>>,
 }
 
 /// Where and how the world places a new agent; the model adds its own state.

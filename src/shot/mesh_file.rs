@@ -1,10 +1,14 @@
-//! Mesh files for `type = "mesh"` obstacles: Wavefront OBJ and STL (binary or ASCII)
-//! read into vertices and triangles, every problem located by line (OBJ, ASCII STL) or
-//! triangle (binary STL). Coordinates are taken as they are: metres, Y-up (what Blender's
-//! OBJ exporter writes with its default "Y up" option, and what the add-on writes).
+//! Mesh files for `type = "mesh"` obstacles: Wavefront OBJ, STL (binary or ASCII), PLY
+//! (ASCII or binary) and glTF 2.0 (`.gltf` with its buffers, or `.glb`) read into
+//! vertices and triangles, every problem located by line (OBJ, ASCII STL, PLY header and
+//! ASCII body), element (binary STL and PLY) or JSON key/line (glTF). Coordinates are
+//! taken as they are: metres, Y-up (what Blender's OBJ and PLY exporters write with their
+//! default "Y up" option, what glTF defines, and what the add-on writes).
 //!
-//! The readers are small and our own rather than a crate's (`tobj` was considered) so that
-//! a bad file is reported at its line, like a bad shot.
+//! The OBJ, STL and PLY readers are small and our own rather than a crate's (`tobj` was
+//! considered) so that a bad file is reported at its line, like a bad shot. glTF goes
+//! through the `gltf` crate (JSON, GLB container, accessors), its errors located by the
+//! JSON line or the key (`meshes[0].primitives[1]`) they are about.
 
 use glam::Vec3;
 use std::path::Path;
@@ -39,17 +43,29 @@ impl FileError {
     }
 }
 
-/// Reads `path` by its extension (`.obj`, `.stl`).
-pub fn read(path: &Path) -> Result<MeshData, FileError> {
+/// How errors about the `node` key begin (so the shot can point at that key).
+pub const NODE_ERROR: &str = "no node";
+
+/// The extensions [`read`] knows.
+pub const EXTENSIONS: &[&str] = &["obj", "stl", "ply", "gltf", "glb"];
+
+/// Reads `path` by its extension (see [`EXTENSIONS`]). `node`: glTF only, the meshes of
+/// the node of that name and of its children (all of the default scene's when `None`).
+pub fn read(path: &Path, node: Option<&str>) -> Result<MeshData, FileError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    if ext != "obj" && ext != "stl" {
+    if !EXTENSIONS.contains(&ext.as_str()) {
         return Err(FileError::whole(
-            "expected a .obj or .stl mesh file (Blender: File > Export > Wavefront (.obj))",
+            "expected a .obj, .stl, .ply, .gltf or .glb mesh file (Blender: File > Export > glTF 2.0)",
         ));
+    }
+    if node.is_some() && ext != "gltf" && ext != "glb" {
+        return Err(FileError::whole(format!(
+            "no nodes in a .{ext} file: `node` picks a node of a .gltf or .glb file"
+        )));
     }
     let len = std::fs::metadata(path)
         .map_err(|e| FileError::whole(format!("cannot read it: {e}")))?
@@ -61,16 +77,19 @@ pub fn read(path: &Path) -> Result<MeshData, FileError> {
     }
     let bytes =
         std::fs::read(path).map_err(|e| FileError::whole(format!("cannot read it: {e}")))?;
-    let data = if ext == "obj" {
-        let text = std::str::from_utf8(&bytes).map_err(|e| {
-            FileError::whole(format!(
-                "not a text OBJ file: byte {} is not UTF-8",
-                e.valid_up_to()
-            ))
-        })?;
-        parse_obj(text)?
-    } else {
-        parse_stl(&bytes)?
+    let data = match ext.as_str() {
+        "obj" => {
+            let text = std::str::from_utf8(&bytes).map_err(|e| {
+                FileError::whole(format!(
+                    "not a text OBJ file: byte {} is not UTF-8",
+                    e.valid_up_to()
+                ))
+            })?;
+            parse_obj(text)?
+        }
+        "stl" => parse_stl(&bytes)?,
+        "ply" => super::mesh_ply::parse_ply(&bytes)?,
+        _ => super::mesh_gltf::parse_gltf(&bytes, path.parent(), node)?,
     };
     if data.triangles.is_empty() {
         return Err(FileError::whole("the file has no triangles"));
@@ -78,7 +97,11 @@ pub fn read(path: &Path) -> Result<MeshData, FileError> {
     Ok(data)
 }
 
-fn at(line: usize, text: &str, message: impl Into<String>) -> FileError {
+pub(super) fn whole(message: impl Into<String>) -> FileError {
+    FileError::whole(message)
+}
+
+pub(super) fn at(line: usize, text: &str, message: impl Into<String>) -> FileError {
     FileError {
         line,
         source_line: Some(text.to_owned()),

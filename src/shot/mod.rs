@@ -6,6 +6,8 @@
 pub mod defaults;
 pub mod locate;
 pub mod mesh_file;
+mod mesh_gltf;
+mod mesh_ply;
 mod output;
 mod resolve;
 pub mod schema;
@@ -69,6 +71,9 @@ pub struct Swarm {
     pub bee: Body,
     /// Soft containment box (centre, half extents); `None` = unbounded.
     pub bounds: Option<(Vec3, Vec3)>,
+    /// FASTSWARM's velocity database from the shot's `database` file; `None`: the
+    /// shipped one.
+    pub database: Option<std::sync::Arc<crate::model::fastswarm::database::Database>>,
 }
 
 /// A volume bees are spawned in.

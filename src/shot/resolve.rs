@@ -8,7 +8,9 @@ use super::*;
 use crate::error::ShotError;
 use crate::geometry::mesh::{Mesh, MeshError as MeshErr, MeshMode};
 use crate::model::ParamValues;
+use crate::model::fastswarm::database::Database;
 use glam::Quat;
+use std::sync::{Arc, Weak};
 
 /// The longest scene or swarm name: names become file, node and prim names, and a file
 /// name (with the writers' suffixes) must stay under the 255 bytes file systems allow.
@@ -440,7 +442,13 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
     }
     let mut targets = Vec::new();
     for (i, rt) in raw.target.iter().enumerate() {
-        targets.push(resolve_target(&cx, i, rt, &swarms)?);
+        if rt.curve.is_some() || rt.samples.is_some() {
+            for point in curve_samples(&cx, i, rt)? {
+                targets.push(resolve_target(&cx, i, &point, &swarms)?);
+            }
+        } else {
+            targets.push(resolve_target(&cx, i, rt, &swarms)?);
+        }
     }
     let wind = match raw.wind.as_ref().and_then(|w| w.velocity) {
         Some(v) => cx.vec_in("wind.velocity", v, "m/s")?,
@@ -862,6 +870,11 @@ fn resolve_swarm(
         )),
     };
 
+    let database = match &rs.database {
+        None => None,
+        Some(file) => Some(resolve_database(cx, i, model, file, base)?),
+    };
+
     Ok(Swarm {
         name,
         count: count as usize,
@@ -872,7 +885,66 @@ fn resolve_swarm(
         variation,
         bee,
         bounds,
+        database,
     })
+}
+
+/// A swarm's `database` key: a FASTSWARM velocity database file (`beeswarm fastswarm-db`
+/// writes them), read and checked; errors inside the file point at its line, and back.
+fn resolve_database(
+    cx: &Ctx,
+    i: usize,
+    model: ModelKind,
+    file: &str,
+    base: &Path,
+) -> Result<Arc<Database>, ShotError> {
+    let key = format!("swarm[{i}].database");
+    if model != ModelKind::Fastswarm {
+        return Err(cx.hint(
+            &key,
+            format!("a {} swarm has no velocity database", model.name()),
+            "`database` names the recorded velocities of a model = \"fastswarm\" swarm",
+        ));
+    }
+    let path = base.join(file);
+    // A database is a few tens of kilobytes; a much larger file is not one.
+    const MAX_BYTES: u64 = 64 * 1024 * 1024;
+    let text = std::fs::File::open(&path)
+        .and_then(|f| {
+            let mut s = String::new();
+            std::io::Read::read_to_string(&mut std::io::Read::take(f, MAX_BYTES + 1), &mut s)
+                .map(|_| s)
+        })
+        .map_err(|e| cx.err(&key, format!("{}: cannot read it: {e}", path.display())))?;
+    if text.len() as u64 > MAX_BYTES {
+        return Err(cx.err(
+            &key,
+            format!(
+                "{}: larger than {} MB; not a velocity database",
+                path.display(),
+                MAX_BYTES >> 20
+            ),
+        ));
+    }
+    Database::parse_located(&text)
+        .map(Arc::new)
+        .map_err(|(line, message)| {
+            let mut err = cx.err(&key, message.clone());
+            if line > 0 {
+                err.hint = Some(format!(
+                    "the velocity database of swarm[{i}], `database` at {}:{}",
+                    err.file.display(),
+                    err.line
+                ));
+                err.file = path.clone();
+                err.line = line;
+                err.column = 1;
+                err.source_line = text.lines().nth(line - 1).map(str::to_owned);
+            } else {
+                err.message = format!("{}: {message}", path.display());
+            }
+            err
+        })
 }
 
 fn euler_deg(v: Vec3) -> Quat {
@@ -928,7 +1000,15 @@ fn resolve_obstacle(
         "box" => &["center", "size", "rotation"],
         "capsule" | "shaft" => &["a", "b", "radius"],
         "cylinder" => &["center", "radius", "height", "rotation"],
-        "mesh" => &["file", "mode", "thickness", "position", "rotation", "scale"],
+        "mesh" => &[
+            "file",
+            "node",
+            "mode",
+            "thickness",
+            "position",
+            "rotation",
+            "scale",
+        ],
         _ => &["point", "normal"],
     };
     let present = [
@@ -946,6 +1026,7 @@ fn resolve_obstacle(
         ("thickness", ro.thickness.is_some()),
         ("position", ro.position.is_some()),
         ("scale", ro.scale.is_some()),
+        ("node", ro.node.is_some()),
     ];
     if let Some((key, _)) = present.iter().find(|(key, p)| *p && !allowed.contains(key)) {
         return Err(cx.hint(
@@ -1019,12 +1100,12 @@ fn resolve_mesh(
     ro: &RawObstacle,
     base: &Path,
     rotation: Quat,
-) -> Result<&'static Mesh, ShotError> {
+) -> Result<Arc<Mesh>, ShotError> {
     let k = |key: &str| format!("obstacle[{i}].{key}");
     let file = cx.required(
         &k("file"),
         &ro.file,
-        "the mesh file, .obj or .stl, relative to the shot",
+        "the mesh file (.obj, .stl, .ply, .gltf or .glb), relative to the shot",
     )?;
     let mode_name = ro.mode.clone().unwrap_or_else(|| "solid".to_owned());
     let mode = match cx.one_of(&k("mode"), &mode_name, &["solid", "shell"])? {
@@ -1052,6 +1133,9 @@ fn resolve_mesh(
     let scale = cx.size(&k("scale"), ro.scale.unwrap_or([1.0; 3]))?;
     let path = base.join(&file);
     let located = |e: mesh_file::FileError| -> ShotError {
+        if ro.node.is_some() && e.message.starts_with(mesh_file::NODE_ERROR) {
+            return cx.err(&k("node"), format!("{}: {}", path.display(), e.message));
+        }
         let mut err = cx.err(&k("file"), e.message.clone());
         if e.line > 0 {
             // The problem is inside the mesh file: point there, and back to the shot.
@@ -1069,7 +1153,7 @@ fn resolve_mesh(
         }
         err
     };
-    let data = mesh_file::read(&path).map_err(located)?;
+    let data = mesh_file::read(&path, ro.node.as_deref()).map_err(located)?;
     let vertices: Vec<Vec3> = data
         .vertices
         .iter()
@@ -1077,8 +1161,14 @@ fn resolve_mesh(
         .collect();
     let key = mesh_key(&vertices, &data.triangles, mode);
     let mut loaded = LOADED_MESHES.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, m)) = loaded.iter().find(|(k, _)| *k == key) {
-        return Ok(*m);
+    // Meshes no shot holds any more are gone; forget them.
+    loaded.retain(|(_, m)| m.strong_count() > 0);
+    if let Some(m) = loaded
+        .iter()
+        .find(|(k, _)| *k == key)
+        .and_then(|(_, m)| m.upgrade())
+    {
+        return Ok(m);
     }
     let mesh = Mesh::new(&vertices, &data.triangles, mode).map_err(|e| {
         let hint = match e {
@@ -1093,17 +1183,16 @@ fn resolve_mesh(
         err.hint = hint;
         err
     })?;
-    // Leaked on purpose: shapes are `Copy` and shared by every thread for the whole
-    // bake; each distinct mesh is built once per process (see LOADED_MESHES).
-    let mesh: &'static Mesh = Box::leak(Box::new(mesh));
-    loaded.push((key, mesh));
+    // Shared by the shot, its copies and the simulation; freed with the last of them.
+    let mesh = Arc::new(mesh);
+    loaded.push((key, Arc::downgrade(&mesh)));
     Ok(mesh)
 }
 
-/// Meshes built so far in this process, by [`mesh_key`]: resolving the same shot again
-/// (a check, then a bake; a test suite) reuses them instead of leaking another copy.
-static LOADED_MESHES: std::sync::Mutex<Vec<(u64, &'static Mesh)>> =
-    std::sync::Mutex::new(Vec::new());
+/// Meshes alive in this process, by [`mesh_key`]: resolving the same shot again while a
+/// copy is held (a check, then a bake; a wedge's variants) shares the mesh instead of
+/// building it again. Weak, so this list never keeps a mesh alive.
+static LOADED_MESHES: std::sync::Mutex<Vec<(u64, Weak<Mesh>)>> = std::sync::Mutex::new(Vec::new());
 
 /// A digest of the placed vertices, the triangles and the mode.
 fn mesh_key(vertices: &[Vec3], triangles: &[[u32; 3]], mode: MeshMode) -> u64 {
@@ -1120,6 +1209,78 @@ fn mesh_key(vertices: &[Vec3], triangles: &[[u32; 3]], mode: MeshMode) -> u64 {
         MeshMode::Shell { thickness } => thickness.to_bits().hash(&mut h),
     }
     h.finish()
+}
+
+/// The most targets one `curve` expands into.
+const MAX_CURVE_SAMPLES: i64 = 1000;
+
+/// A target with `curve` and `samples`: one static target per sample, spread evenly by arc
+/// length along the polyline through the curve's points, in order (a closed curve, whose
+/// last point repeats its first, does not repeat it), named `<name>_00`, `<name>_01`, ….
+/// The key points of a FASTSWARM shape (paper 003 Sec. 5.1.2) drawn as a curve.
+fn curve_samples(cx: &Ctx, i: usize, rt: &RawTarget) -> Result<Vec<RawTarget>, ShotError> {
+    let k = |key: &str| format!("target[{i}].{key}");
+    let raw = cx.required(
+        &k("curve"),
+        &rt.curve,
+        "the curve's points [[x, y, z], ...] that `samples` spreads targets along",
+    )?;
+    if rt.position.is_some() || rt.keys.is_some() {
+        return Err(cx.hint(
+            &k("curve"),
+            "a target along a curve has no `position` or `keys`",
+            "each sample of the curve is a target at its own place",
+        ));
+    }
+    let pts: Vec<Vec3> = raw
+        .iter()
+        .map(|p| cx.vec(&k("curve"), *p))
+        .collect::<Result<_, _>>()?;
+    let samples = cx.required(&k("samples"), &rt.samples, "how many targets, 2 to 1000")?;
+    if !(2..=MAX_CURVE_SAMPLES).contains(&samples) {
+        return Err(cx.err(
+            &k("samples"),
+            format!("expected 2 to {MAX_CURVE_SAMPLES} samples, found {samples}"),
+        ));
+    }
+    let lengths: Vec<f32> = pts.windows(2).map(|w| w[0].distance(w[1])).collect();
+    let total: f32 = lengths.iter().sum();
+    if pts.len() < 2 || total <= 0.0 {
+        return Err(cx.err(
+            &k("curve"),
+            "expected at least two distinct points [[x, y, z], [x, y, z], ...]",
+        ));
+    }
+    let closed = pts[0] == pts[pts.len() - 1];
+    let n = samples as usize;
+    let step = total / if closed { n } else { n - 1 } as f32;
+    let name = rt
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("curve_{}", i + 1));
+    let mut out = Vec::with_capacity(n);
+    let (mut seg, mut start) = (0usize, 0.0f32);
+    for s in 0..n {
+        let at = (step * s as f32).min(total);
+        while seg + 1 < lengths.len() && start + lengths[seg] < at {
+            start += lengths[seg];
+            seg += 1;
+        }
+        let t = if lengths[seg] > 0.0 {
+            ((at - start) / lengths[seg]).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let p = pts[seg].lerp(pts[seg + 1], t);
+        out.push(RawTarget {
+            name: Some(format!("{name}_{s:02}")),
+            position: Some([p.x as f64, p.y as f64, p.z as f64]),
+            curve: None,
+            samples: None,
+            ..rt.clone()
+        });
+    }
+    Ok(out)
 }
 
 fn resolve_target(
@@ -1291,4 +1452,98 @@ fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::geometry::Shape;
+
+    /// A target with `curve` and `samples` becomes that many targets, evenly spaced along
+    /// the polyline in order; a closed curve does not repeat its start; errors are located.
+    #[test]
+    fn a_curve_is_sampled_into_key_points() {
+        let dir = std::path::Path::new(".");
+        let parse = |t: &str| {
+            super::super::parse(
+                &format!(
+                    "[[swarm]]\ncount = 2\nmodel = \"fastswarm\"\npreset = \"shape\"\n[[target]]\n{t}"
+                ),
+                &dir.join("s.toml"),
+                dir,
+            )
+        };
+        // A closed unit square, 8 samples: its corners and the middles of its sides.
+        let shot = parse("name = \"sq\"\ncurve = [[0, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 1, 0]]\nsamples = 8\n").unwrap();
+        let got: Vec<glam::Vec3> = shot.targets.iter().map(|t| t.position_at(1.0)).collect();
+        let want = [
+            [0.0, 1.0],
+            [0.5, 1.0],
+            [1.0, 1.0],
+            [1.0, 1.5],
+            [1.0, 2.0],
+            [0.5, 2.0],
+            [0.0, 2.0],
+            [0.0, 1.5],
+        ];
+        assert_eq!(got.len(), 8);
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (*g - glam::Vec3::new(w[0], w[1], 0.0)).length() < 1e-5,
+                "{got:?}"
+            );
+        }
+        assert_eq!(shot.targets[3].name, "sq_03");
+        // Open: both ends are samples.
+        let shot = parse("curve = [[0, 1, 0], [2, 1, 0]]\nsamples = 3\n").unwrap();
+        assert_eq!(
+            shot.targets[2].position_at(1.0),
+            glam::Vec3::new(2.0, 1.0, 0.0)
+        );
+        let e = parse("curve = [[0, 1, 0], [2, 1, 0]]\nsamples = 1\n").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("expected 2 to 1000 samples, found 1"),
+            "{e}"
+        );
+        let e = parse("curve = [[0, 1, 0]]\nsamples = 4\n").unwrap_err();
+        assert!(
+            e.to_string().contains("at least two distinct points"),
+            "{e}"
+        );
+        let e = parse("curve = [[0, 1, 0], [1, 1, 0]]\n").unwrap_err();
+        assert!(e.to_string().contains("target[0].samples"), "{e}");
+        let e = parse("curve = [[0, 1, 0], [1, 1, 0]]\nsamples = 3\nposition = [0, 0, 0]\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("has no `position` or `keys`"), "{e}");
+    }
+
+    /// A mesh lives as long as a shot (or a simulation's copy) holds it, is shared while
+    /// it does, and is freed with the last holder.
+    #[test]
+    fn meshes_are_shared_while_held_and_freed_after() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("t.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+        )
+        .unwrap();
+        let src = "[[swarm]]\ncount = 2\n[[obstacle]]\ntype = \"mesh\"\nfile = \"t.obj\"\n";
+        let load = || super::super::parse(src, &dir.path().join("s.toml"), dir.path()).unwrap();
+        let mesh_of = |s: &crate::shot::Shot| match &s.obstacles[0].shape {
+            Shape::Mesh { mesh } => mesh.clone(),
+            other => panic!("{other:?}"),
+        };
+        let a = load();
+        let b = load();
+        let m = mesh_of(&a);
+        assert!(
+            std::sync::Arc::ptr_eq(&m, &mesh_of(&b)),
+            "built once, shared"
+        );
+        let weak = std::sync::Arc::downgrade(&m);
+        drop((a, b, m));
+        assert!(weak.upgrade().is_none(), "freed with its last holder");
+        // Built again when asked again.
+        assert_eq!(mesh_of(&load()).triangle_count(), 4);
+    }
 }

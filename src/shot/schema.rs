@@ -49,6 +49,8 @@ pub struct RawSwarm {
     pub bounds: Option<RawBounds>,
     /// Model parameter overrides, applied over the preset.
     pub params: Option<RawParams>,
+    /// FASTSWARM: the velocity database file (relative to the shot).
+    pub database: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]
@@ -104,6 +106,8 @@ pub struct RawObstacle {
     /// Mesh obstacles: the mesh file (relative to the shot), how it is avoided, and its
     /// placement (scale, then rotation, then position).
     pub file: Option<String>,
+    /// glTF: the node whose meshes (with its children's) are the obstacle.
+    pub node: Option<String>,
     pub mode: Option<String>,
     pub thickness: Option<f64>,
     pub position: Option<V3>,
@@ -123,6 +127,10 @@ pub struct RawTarget {
     pub normal: Option<V3>,
     pub swarms: Option<Vec<String>>,
     pub keys: Option<Vec<RawKey>>,
+    /// Points of a polyline (first = last: closed): the target stands for `samples` targets
+    /// spread evenly along it (FASTSWARM's key points, paper 003 Eq. 15).
+    pub curve: Option<Vec<V3>>,
+    pub samples: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

@@ -321,7 +321,7 @@ fn start(shot: &Shot, obstacles: &[Shape], si: usize, k: usize) -> (Start, Rng) 
 impl Simulation {
     pub fn new(shot: &Shot) -> Self {
         let shot = shot.clone();
-        let obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape).collect();
+        let obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape.clone()).collect();
         let mut swarms: Vec<Box<dyn Swarm>> = Vec::with_capacity(shot.swarms.len());
         let mut first = 0;
         for (si, s) in shot.swarms.iter().enumerate() {
@@ -333,6 +333,7 @@ impl Simulation {
                 body: s.bee,
                 variation: s.variation,
                 bounds: s.bounds,
+                database: s.database.clone(),
                 targets: shot
                     .targets
                     .iter()

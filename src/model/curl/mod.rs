@@ -157,6 +157,7 @@ mod tests {
         let mut params = ParamValues::defaults(ModelKind::Curl);
         assert!(params.set("speed", speed));
         CurlModel::new(&SwarmSetup {
+            database: None,
             index: 0,
             seed: 7,
             dt: 1.0 / 96.0,

@@ -190,10 +190,12 @@ impl Database {
         }
     }
 
-    /// The database shipped with beeswarm (parsed once).
-    pub fn default_mosquito() -> &'static Database {
-        static DB: std::sync::OnceLock<Database> = std::sync::OnceLock::new();
-        DB.get_or_init(|| Database::parse(DEFAULT_TEXT).expect("the shipped database parses"))
+    /// The database shipped with beeswarm (parsed once, shared).
+    pub fn default_mosquito() -> &'static std::sync::Arc<Database> {
+        static DB: std::sync::OnceLock<std::sync::Arc<Database>> = std::sync::OnceLock::new();
+        DB.get_or_init(|| {
+            std::sync::Arc::new(Database::parse(DEFAULT_TEXT).expect("the shipped database parses"))
+        })
     }
 
     /// The candidates for an agent flying at `speed`: its speed group and the groups
@@ -232,6 +234,17 @@ impl Database {
 
     /// Parses the file text; errors name the line and what was expected.
     pub fn parse(text: &str) -> Result<Database, String> {
+        Database::parse_located(text).map_err(|(line, m)| {
+            if line > 0 {
+                format!("line {line}: {m}")
+            } else {
+                m
+            }
+        })
+    }
+
+    /// [`Database::parse`] with the error's 1-based line apart (0: the whole file).
+    pub fn parse_located(text: &str) -> Result<Database, (usize, String)> {
         let mut dt = None;
         let mut samples = Vec::new();
         for (n, line) in text.lines().enumerate() {
@@ -241,14 +254,11 @@ impl Database {
             }
             if let Some(rest) = line.strip_prefix("dt") {
                 let v = rest.trim_start().strip_prefix('=').map(str::trim);
-                let v: f64 = v.and_then(|v| v.parse().ok()).ok_or_else(|| {
-                    format!("line {}: expected `dt = <seconds>`, found `{line}`", n + 1)
-                })?;
+                let v: f64 = v
+                    .and_then(|v| v.parse().ok())
+                    .ok_or_else(|| (n + 1, format!("expected `dt = <seconds>`, found `{line}`")))?;
                 if !(v > 0.0 && v < 10.0) {
-                    return Err(format!(
-                        "line {}: expected a step from 0 to 10 s, found {v}",
-                        n + 1
-                    ));
+                    return Err((n + 1, format!("expected a step from 0 to 10 s, found {v}")));
                 }
                 dt = Some(v);
                 continue;
@@ -258,15 +268,17 @@ impl Database {
                 .map(|x| x.trim().parse::<f32>())
                 .collect::<Result<_, _>>()
                 .map_err(|_| {
-                    format!(
-                        "line {}: expected six numbers vx,vy,vz,ax,ay,az, found `{line}`",
-                        n + 1
+                    (
+                        n + 1,
+                        format!("expected six numbers vx,vy,vz,ax,ay,az, found `{line}`"),
                     )
                 })?;
             if f.len() != 6 || f.iter().any(|x| !x.is_finite() || x.abs() > 1000.0) {
-                return Err(format!(
-                    "line {}: expected six finite numbers within ±1000 (vx,vy,vz,ax,ay,az), found `{line}`",
-                    n + 1
+                return Err((
+                    n + 1,
+                    format!(
+                        "expected six finite numbers within ±1000 (vx,vy,vz,ax,ay,az), found `{line}`"
+                    ),
                 ));
             }
             samples.push(Sample {
@@ -274,12 +286,15 @@ impl Database {
                 a: Vec3::new(f[3], f[4], f[5]),
             });
         }
-        let dt = dt.ok_or("no `dt = <seconds>` line")?;
+        let dt = dt.ok_or((0, "no `dt = <seconds>` line".to_owned()))?;
         if samples.len() < 3 * GROUP_SIZE {
-            return Err(format!(
-                "{} samples; a database needs at least {}",
-                samples.len(),
-                3 * GROUP_SIZE
+            return Err((
+                0,
+                format!(
+                    "{} samples; a database needs at least {} (three speed groups of {GROUP_SIZE})",
+                    samples.len(),
+                    3 * GROUP_SIZE
+                ),
             ));
         }
         Ok(Database::new(dt, samples))
@@ -316,7 +331,7 @@ mod tests {
     fn text_round_trips_and_bad_lines_are_named() {
         let db = Database::default_mosquito();
         let again = Database::parse(&db.to_text("x")).unwrap();
-        assert_eq!(&again, db);
+        assert_eq!(&again, &**db);
         let e = Database::parse("dt = 0.02\n1,2,3\n").unwrap_err();
         assert!(e.contains("line 2"), "{e}");
         assert!(Database::parse("1,2,3,4,5,6\n").is_err());

@@ -118,7 +118,7 @@ impl Energy {
     /// d_att1 away and a step moves |δ| ≤ 1 m/s × 0.02 s, so the neglected third-order
     /// term is below (k|δ|)³/6 of f: under 1 % for moves up to 2 cm at d_att1 = 8 cm.
     pub fn attraction(&mut self, w: f32, d_att1: f32, positions: &[Vec3]) {
-        let n = positions.len().min(MAX_NEIGHBOURS);
+        let n = positions.len();
         let (mut f, mut g, mut h) = (0.0f32, Vec3::ZERO, Mat3::ZERO);
         if w > 0.0 && n > 0 {
             let k = self.rho / d_att1;
@@ -163,9 +163,19 @@ impl Energy {
     /// [`Energy::of`] with the candidate's v̂, â and |a| given (the database prepares them).
     #[inline]
     pub fn of_unit(&self, v: Vec3, vh: Vec3, ah: Vec3, a_len: f32) -> f32 {
+        self.of_unit_below(v, vh, ah, a_len, f32::INFINITY)
+            .unwrap_or(f32::INFINITY)
+    }
+
+    /// [`Energy::of_unit`] if it is below `best`, else `None`, found without finishing the
+    /// sum as soon as the terms so far reach `best`: every term is positive (the expanded
+    /// attraction too: per neighbour it is at least half its value at δ = 0), and adding
+    /// a positive float never lowers a sum, so what is left out could not have won.
+    #[inline]
+    pub fn of_unit_below(&self, v: Vec3, vh: Vec3, ah: Vec3, a_len: f32, best: f32) -> Option<f32> {
         let rho = self.rho;
         let p1 = self.p + v * self.dt;
-        let mut e = 0.0;
+        let mut e = 0.0f32;
         for &(w, u) in &self.dirs[..self.n_dirs] {
             // ‖v̂ − û‖ = √(2 − 2 v̂·û) for unit vectors (v̂ = 0 gives 1, as it should).
             let dist = if vh == Vec3::ZERO {
@@ -185,10 +195,14 @@ impl Energy {
         for &(w, at, inv_d) in &self.startle[..self.n_startle] {
             e += w * fast_exp(rho * (1.0 - (p1 - at).length() * inv_d));
         }
+        // Acceleration continuity costs the most: skip it for a candidate already lost.
+        if e.partial_cmp(&best) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
         if self.acc_w > 0.0 {
             e += self.acc_w * self.accel(v, ah, a_len);
         }
-        e
+        (e < best).then_some(e)
     }
 
     /// Eq. 10 without its weight: e^{ρ‖â′ − â‖} + |‖a′‖ − ‖a‖| / ā. The paper's

@@ -11,6 +11,7 @@
 
 pub mod database;
 pub mod energies;
+pub mod neighbours;
 pub mod params;
 pub mod selection;
 pub mod shape;
@@ -29,6 +30,9 @@ use shape::Tour;
 
 /// Random stream of the free rotation (selection.rs).
 const TURN_STREAM: u64 = 0xFA57_5A4D;
+/// The most attraction neighbours an agent averages over (Eq. 6): a whole 500-agent shape
+/// fits, and a bound keeps the step's memory fixed.
+const MAX_ATTRACTION: usize = 512;
 /// Time constant of the body's heading following the direction of travel, s.
 const HEADING_LAG: f32 = 0.04;
 
@@ -70,7 +74,7 @@ impl Agent for Insect {
 }
 
 pub struct FastswarmModel {
-    db: &'static Database,
+    db: std::sync::Arc<Database>,
     p: FastswarmParams,
     rho: f32,
     noise: CurlNoise,
@@ -80,12 +84,14 @@ pub struct FastswarmModel {
     targets: Vec<usize>,
     radius: f32,
     yaw_blend: f32,
+    /// Every agent by grid cell, for Eq. 6's attraction zone (rebuilt each step).
+    cells: neighbours::CellIndex,
 }
 
 impl FastswarmModel {
     /// The database the swarm draws from.
-    pub fn database(&self) -> &'static Database {
-        self.db
+    pub fn database(&self) -> &Database {
+        &self.db
     }
 
     fn shape_mode(&self) -> bool {
@@ -109,7 +115,10 @@ impl Model for FastswarmModel {
     fn new(s: &SwarmSetup) -> Self {
         let p = FastswarmParams::from_values(s.params);
         FastswarmModel {
-            db: Database::default_mosquito(),
+            db: s
+                .database
+                .clone()
+                .unwrap_or_else(|| Database::default_mosquito().clone()),
             rho: p.rho as f32,
             noise: CurlNoise::new(
                 math::mix64(s.seed ^ ((s.index as u64 + 1) * 0xFA57)),
@@ -120,12 +129,21 @@ impl Model for FastswarmModel {
             targets: s.targets.clone(),
             radius: s.body.radius,
             yaw_blend: lag_blend(s.dt as f32, HEADING_LAG),
+            cells: neighbours::CellIndex::default(),
             p,
         }
     }
 
+    /// The world's neighbour list serves the repulsion zone only (Eq. 4); the attraction
+    /// zone is searched in the model's own grid (see `prepare`).
     fn reach(&self) -> f32 {
-        self.p.d_att2.max(self.p.d_rep) as f32
+        self.p.d_rep as f32
+    }
+
+    /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them).
+    fn prepare(&mut self, cx: &Context) {
+        let cell = (self.p.d_att2 as f32).max(1e-4);
+        self.cells.build(cx.agents.iter().map(|a| a.pos), cell);
     }
 
     /// Starts with a database velocity (the paper: "a random velocity selected from the
@@ -184,15 +202,18 @@ impl Model for FastswarmModel {
         // Eq. 4 and 6: neighbours in the repulsion and attraction zones.
         let (d_rep, d_att1, d_att2) = (p.d_rep as f32, p.d_att1 as f32, p.d_att2 as f32);
         let mut rep = [Vec3::ZERO; MAX_NEIGHBOURS];
-        let mut att = [Vec3::ZERO; MAX_NEIGHBOURS];
+        let mut att = [Vec3::ZERO; MAX_ATTRACTION];
         let (mut nr, mut na) = (0, 0);
-        cx.for_each_neighbour(i, d_att2.max(d_rep), |j, pj, d2| {
-            let d = d2.sqrt();
-            if d < d_rep {
-                rep[nr] = pj + cx.agents[j].vel * dt;
-                nr += 1;
-            } else if d >= d_att1 && d < d_att2 {
-                att[na] = pj;
+        cx.for_each_neighbour(i, d_rep, |j, pj, _| {
+            rep[nr] = pj + cx.agents[j].vel * dt;
+            nr += 1;
+        });
+        // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
+        // more, the first MAX_ATTRACTION found (the sum is an average).
+        self.cells.for_each_near(pos, |j| {
+            let d2 = cx.agents[j].pos.distance_squared(pos);
+            if j != i && d2 >= d_att1 * d_att1 && d2 < d_att2 * d_att2 && na < att.len() {
+                att[na] = cx.agents[j].pos;
                 na += 1;
             }
         });

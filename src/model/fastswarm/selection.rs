@@ -77,12 +77,18 @@ pub fn select(
         };
         for (c, s) in [(cc, cs), (fc, fs)] {
             let v = turn(d.v, c, s);
+            let bound = best.map_or(f32::INFINITY, |b| b.energy);
+            let Some(energy) = e.of_unit_below(
+                v,
+                turn(d.v_unit, c, s),
+                turn(d.a_unit, c, s),
+                d.a_len,
+                bound,
+            ) else {
+                continue;
+            };
             let a = turn(d.a, c, s);
-            let energy = e.of_unit(v, turn(d.v_unit, c, s), turn(d.a_unit, c, s), d.a_len);
-            if energy.is_finite()
-                && best.is_none_or(|b| energy < b.energy)
-                && allowed(e.p + v * e.dt)
-            {
+            if energy.is_finite() && allowed(e.p + v * e.dt) {
                 best = Some(Choice {
                     v,
                     a,

@@ -10,7 +10,7 @@ use crate::geometry::{self, Shape};
 use glam::Vec3;
 
 /// One boundary of the noise field.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Boundary {
     /// An obstacle of the shot (free space outside it).
     Shape(Shape),

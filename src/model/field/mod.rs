@@ -130,7 +130,11 @@ impl Model for FieldModel {
             .bounds
             .unwrap_or((Vec3::new(0.0, 5.0, 0.0), Vec3::splat(5.0)));
         let lattice = Lattice::over(domain.0, domain.1, p.cell as f32, MAX_CELLS);
-        let mut walls: Vec<Boundary> = s.obstacles.iter().map(|o| Boundary::Shape(*o)).collect();
+        let mut walls: Vec<Boundary> = s
+            .obstacles
+            .iter()
+            .map(|o| Boundary::Shape(o.clone()))
+            .collect();
         walls.push(Boundary::Domain {
             center: domain.0,
             half: domain.1,
