@@ -36,6 +36,13 @@ pub struct Bee {
     wander: f32,
     /// Exponentially smoothed path; sway is the lateral offset from it.
     mean_pos: Vec3,
+    /// Elevation of the direction of travel, degrees (up positive), followed with the
+    /// heading's lag: the body's pitch is this plus Eq. 3's oscillation about its mean.
+    climb_deg: f32,
+    /// 1 while banking away from an obstacle seen and not yet passed, else 0 (an f32 so
+    /// that the state stays plain 4-byte words for checkpoints).
+    banking: f32,
+    /// Body pitch as drawn, degrees (nose up positive).
     pitch_deg: f32,
     roll_deg: f32,
     /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
@@ -59,6 +66,9 @@ impl Agent for Bee {
     fn place(&mut self, position: Vec3, velocity: Vec3) {
         self.c.place(position, velocity);
         self.mean_pos = position;
+        if velocity.length() > 0.02 {
+            self.climb_deg = elevation_deg(velocity);
+        }
         self.prev_attitude = (self.c.yaw, self.pitch_deg, self.roll_deg);
     }
 }
@@ -154,12 +164,16 @@ impl Model for BeeModel {
         let c = Cruiser::new(start, self.speed);
         let phase_pitch = self.phase_spread * rng.f32() * oscillation::PITCH_PERIOD as f32;
         let phase_roll = self.phase_spread * rng.f32() * oscillation::ROLL_PERIOD as f32;
-        let pitch_deg = oscillation::pitch_deg(phase_pitch as f64);
+        let climb_deg = elevation_deg(c.vel);
+        let pitch_deg =
+            climb_deg + oscillation::pitch_deg(phase_pitch as f64) - oscillation::MEAN_PITCH_DEG;
         let roll_deg = oscillation::roll_deg(phase_roll as f64);
         Bee {
             c,
             wander: rng.gaussian(),
             mean_pos: c.pos,
+            climb_deg,
+            banking: 0.0,
             pitch_deg,
             roll_deg,
             prev_attitude: (c.yaw, pitch_deg, roll_deg),
@@ -247,13 +261,16 @@ impl Model for BeeModel {
         let air = c.vel - cx.wind;
         let heading = Quat::from_rotation_y(c.yaw);
         let tt = cx.t / self.time_unit;
-        out.pitch_deg = oscillation::pitch_deg(tt + b.phase_pitch as f64);
+        // Eq. 3's pitch drives the thrust (Eq. 2); the body drawn points along the flight
+        // direction, rocking by Eq. 3's oscillation about it (docs/model.md).
+        let wing_pitch = oscillation::pitch_deg(tt + b.phase_pitch as f64);
         let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
-        let forward = heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
+        let forward = heading * (Quat::from_rotation_z(b.pitch_deg.to_radians()) * Vec3::X);
         let d0 = self.flight.d0;
         let mut gamma = 1.0f32;
         let mut nearest = f32::INFINITY;
         let mut nearest_any = f32::INFINITY;
+        let (mut nearest_bank, mut bank) = (f32::INFINITY, None::<f32>);
         // While avoiding an obstacle it sees: the horizontal way out, away from every
         // obstacle within d0 (seen or not, so that a corner's way out is its diagonal).
         let mut steer = Avoidance::default();
@@ -265,7 +282,7 @@ impl Model for BeeModel {
                 let n = normalize_or(Vec3::new(-r_e.x, 0.0, -r_e.z), Vec3::ZERO);
                 steer.away += n * (1.0 - d.max(0.0) / d0);
             }
-            // The nearest obstacle seen within d0 takes over the roll.
+            // The nearest obstacle seen within d0 takes over the roll and the flight.
             if d < d0 && d < nearest && vision::in_view(forward, r_e, self.fov) {
                 nearest = d;
                 roll_target =
@@ -273,10 +290,31 @@ impl Model for BeeModel {
                 gamma = vision::ramp((d / d0).max(0.0)).abs();
                 steer.avoiding = true;
             }
+            // One that has left the view to the side but is not yet abeam (a shaft being
+            // passed) keeps the bank until it is: the bee levels out once the obstacle is
+            // avoided, not as soon as its nose turns away from it (docs/model.md).
+            if d < d0 && d < nearest_bank && forward.dot(r_e) > 0.0 {
+                nearest_bank = d;
+                bank = Some(vision::avoid_roll_deg(
+                    vision::side(forward, r_e),
+                    d,
+                    d0,
+                    self.roll_max,
+                ));
+            }
         }
+        // Banking: 1 from the moment an obstacle is seen until it is abeam or beyond d0.
+        out.banking = if steer.avoiding {
+            1.0
+        } else if let (Some(r), true) = (bank, b.banking > 0.5) {
+            roll_target = r;
+            1.0
+        } else {
+            0.0
+        };
         out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * self.roll_blend;
         let f_o = oscillation::accel(
-            out.pitch_deg,
+            wing_pitch,
             out.roll_deg,
             air.length(),
             self.mass,
@@ -307,6 +345,11 @@ impl Model for BeeModel {
                 - air * drag;
 
         out.c = self.flight.advance(cx, c, a, a_col, steer);
+        if out.c.vel.length() > 0.02 {
+            out.climb_deg =
+                b.climb_deg + (elevation_deg(out.c.vel) - b.climb_deg) * self.flight.yaw_blend;
+        }
+        out.pitch_deg = out.climb_deg + wing_pitch - oscillation::MEAN_PITCH_DEG;
         out.mean_pos = b.mean_pos + (out.c.pos - b.mean_pos) * self.sway_blend;
         out.prev_attitude = (c.yaw, b.pitch_deg, b.roll_deg);
         out
@@ -328,6 +371,11 @@ impl Model for BeeModel {
         channels[1] = b.roll_deg;
         channels[2] = (b.c.pos - b.mean_pos).dot(pose.heading * Vec3::Z);
     }
+}
+
+/// Elevation of `v` above the horizontal, degrees.
+fn elevation_deg(v: Vec3) -> f32 {
+    v.y.atan2(Vec3::new(v.x, 0.0, v.z).length()).to_degrees()
 }
 
 /// Body orientation from heading (radians) and pitch and roll (degrees).
