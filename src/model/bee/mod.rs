@@ -93,6 +93,7 @@ pub struct BeeModel {
     wander_kick: f32,
     surface_speed: f32,
     surface_speed_distance: f32,
+    arrival_speed: f32,
     time_unit: f64,
     stiffness: f32,
     mass: f32,
@@ -137,6 +138,7 @@ impl Model for BeeModel {
             wander_kick: (1.0 - (-2.0 * dt / p.speed_wander_time).exp()).sqrt() as f32,
             surface_speed: p.surface_speed as f32,
             surface_speed_distance: p.surface_speed_distance as f32,
+            arrival_speed: p.arrival_speed as f32,
             time_unit: p.oscillation_time_unit,
             stiffness: p.pressure_stiffness as f32,
             mass: s.body.mass,
@@ -331,6 +333,19 @@ impl Model for BeeModel {
                 self.surface_speed,
                 self.surface_speed_distance,
             );
+        // Arriving at a nest or flower the bee slows to a hover (docs/model.md), so that it
+        // does not overshoot and orbit it: the approach and retreat are then the push of
+        // the target's particles against the pull (Sec. V-B).
+        if self.arrival_speed < 1.0 {
+            let mut nearest_target = f32::INFINITY;
+            for &ti in &self.flight.targets {
+                let t = &cx.targets[ti];
+                if t.kind.has_body() {
+                    nearest_target = nearest_target.min(c.pos.distance(t.center) - t.radius);
+                }
+            }
+            pref *= vision::surface_speed_factor(nearest_target, self.arrival_speed, self.h);
+        }
         if self.wander_sigma > 0.0 {
             let mut rng = cx.rng(0x5BEED, i);
             out.wander = b.wander * self.wander_decay + self.wander_kick * rng.gaussian();
