@@ -380,32 +380,83 @@ fn no_dominant_one_way_orbiting_at_the_entrance() {
     assert!(y < 0.25 && z < 0.25, "one-way orbiting: {y} {z}");
 }
 
-/// Landings at flowers in grassland.toml: a bee that stays at least half a second within
-/// 3 cm of a flower's surface slower than 0.1 m/s, per bee per minute.
+/// Landings at the flowers of grassland.toml (`land = true`, `stay = [2, 6]`), read from
+/// the recorded `state` channel: per bee per minute, with every landed bee-frame on a
+/// flower's surface and every completed stay within the range.
 #[test]
-fn landings_at_flowers() {
+fn bees_land_on_flowers_stay_and_take_off() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/grassland.toml");
     let sh = beeswarm::shot::load(&path).unwrap();
     let flowers: Vec<(Vec3, f32)> = sh.targets.iter().map(|t| (t.keys[0].1, t.radius)).collect();
-    let f = record_all(Simulation::new(&sh));
-    let n = f[0].len();
-    let mut landings = 0;
+    let r_max = sh.swarms[0].bee.radius * (1.0 + sh.swarms[0].variation.size);
+    let sim = Simulation::new(&sh);
+    let state = sim.meta().swarms[0]
+        .channel("state")
+        .expect("a state channel");
+    let mut states: Vec<Vec<f32>> = Vec::new();
+    let mut off_surface = 0;
+    let mut landed_frames = 0;
+    run_with(sim, |sim| {
+        let s = &sim.record()[0];
+        for i in 0..s.len() {
+            if s.channels[state][i] == 2.0 {
+                landed_frames += 1;
+                let p = s.position[i];
+                let on = flowers.iter().any(|&(c, rad)| {
+                    let d = p.distance(c);
+                    d >= rad - 1e-4 && d <= rad + r_max + 1e-4
+                });
+                if !on || s.velocity[i] != Vec3::ZERO {
+                    off_surface += 1;
+                }
+            }
+        }
+        states.push(s.channels[state].clone());
+    });
+    let n = states[0].len();
+    let (mut landings, mut take_offs, mut stays) = (0, 0, Vec::new());
+    let mut hovering = 0;
     for b in 0..n {
-        let mut run = 0;
-        for fr in &f {
-            let r = fr[b];
-            let on = flowers
-                .iter()
-                .any(|&(c, rad)| r.pos.distance(c) < rad + 0.03 + sh.swarms[0].bee.radius)
-                && r.vel.length() < 0.1;
-            run = if on { run + 1 } else { 0 };
-            if run == (sh.fps / 2.0) as usize {
+        let mut since = None;
+        for (f, fr) in states.iter().enumerate() {
+            let landed = fr[b] == 2.0;
+            let was = f > 0 && states[f - 1][b] == 2.0;
+            hovering += (fr[b] == 1.0) as usize;
+            if landed && !was {
                 landings += 1;
+                since = Some(f);
+            }
+            if !landed && was {
+                take_offs += 1;
+                if let Some(s0) = since.take() {
+                    stays.push((f - s0) as f64 / sh.fps);
+                }
             }
         }
     }
-    let minutes = f.len() as f64 / sh.fps / 60.0;
+    let minutes = states.len() as f64 / sh.fps / 60.0;
     let rate = landings as f64 / n as f64 / minutes;
-    println!("grassland.toml: {landings} landings at flowers, {rate:.3} per bee per minute");
-    assert!(rate.is_finite());
+    let total = (n * states.len()) as f64;
+    println!(
+        "grassland.toml: {landings} landings at flowers ({rate:.2} per bee per minute), \
+         {take_offs} take-offs, stays {:.2}-{:.2} s, {:.2} % of bee-frames landed, {:.2} % hovering",
+        stays.iter().copied().fold(f64::MAX, f64::min),
+        stays.iter().copied().fold(0.0, f64::max),
+        landed_frames as f64 / total * 100.0,
+        hovering as f64 / total * 100.0
+    );
+    assert!(
+        landings >= 10 && rate > 0.05,
+        "{landings} landings, {rate} per bee per minute"
+    );
+    assert!(take_offs > 0, "bees take off again");
+    assert_eq!(
+        off_surface, 0,
+        "landed bees sit still on a flower's surface"
+    );
+    let frame = 1.0 / sh.fps;
+    assert!(
+        stays.iter().all(|&s| s >= 2.0 - frame && s <= 6.0 + frame),
+        "stays {stays:?}"
+    );
 }

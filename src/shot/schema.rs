@@ -123,6 +123,8 @@ pub struct RawTarget {
     pub normal: Option<V3>,
     pub swarms: Option<Vec<String>>,
     pub keys: Option<Vec<RawKey>>,
+    pub land: Option<bool>,
+    pub stay: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

@@ -28,6 +28,22 @@ use kernels::Kernels;
 const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
 
+/// Values of the `state` channel.
+pub const FLYING: f32 = 0.0;
+pub const HOVERING: f32 = 1.0;
+pub const LANDED: f32 = 2.0;
+/// Speed, m/s, below which a flying bee is recorded as hovering.
+const HOVER_SPEED: f32 = 0.1;
+/// A bee touches down on a target with `land = true` once its body is this close to the
+/// target's surface, m.
+const TOUCH_DOWN_M: f32 = 0.02;
+/// After taking off a bee flies at least this long, s, before it can land again.
+const TAKE_OFF_S: f32 = 1.0;
+/// A bee that may land and has slowed below this speed, m/s, within the reach of a
+/// `land = true` target's particles comes in to land: that target no longer pushes it
+/// back, and its pull brings the bee down onto the surface.
+const LANDING_SPEED: f32 = 0.5;
+
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
 pub struct Bee {
@@ -48,6 +64,14 @@ pub struct Bee {
     /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
     /// velocity is the rotation between the two attitudes over that substep.
     prev_attitude: (f32, f32, f32),
+    /// `FLYING`, `HOVERING` or `LANDED` (recorded as the `state` channel).
+    state: f32,
+    /// Landed: seconds left before taking off. Flying: seconds before it may land again.
+    timer: f32,
+    /// Landed: the body's offset from the centre of the target it sits on, and that
+    /// target's index (as f32, so that the state stays plain 4-byte words).
+    perch: Vec3,
+    perch_target: f32,
     /// Oscillation phases in the maneuvering functions' own time units.
     phase_pitch: f32,
     phase_roll: f32,
@@ -176,6 +200,10 @@ impl Model for BeeModel {
             mean_pos: c.pos,
             climb_deg,
             banking: 0.0,
+            state: FLYING,
+            timer: 0.0,
+            perch: Vec3::ZERO,
+            perch_target: 0.0,
             pitch_deg,
             roll_deg,
             prev_attitude: (c.yaw, pitch_deg, roll_deg),
@@ -212,6 +240,9 @@ impl Model for BeeModel {
     }
 
     fn step(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
+        if b.state == LANDED {
+            return self.perched(cx, b);
+        }
         let c = &b.c;
         let ri = self.flight.body_radius(c.size);
         let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
@@ -241,6 +272,9 @@ impl Model for BeeModel {
             if c.pos.distance(t.center) > t.radius + self.h + ri {
                 continue;
             }
+            if t.land && b.timer <= 0.0 && c.vel.length() < LANDING_SPEED {
+                continue; // coming in to land
+            }
             for off in &t.particles {
                 let r = c.pos - (t.center + *off);
                 // A static particle mirrors the bee's pressure at rest density.
@@ -267,7 +301,9 @@ impl Model for BeeModel {
         // direction, rocking by Eq. 3's oscillation about it (docs/model.md).
         let wing_pitch = oscillation::pitch_deg(tt + b.phase_pitch as f64);
         let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
-        let forward = heading * (Quat::from_rotation_z(b.pitch_deg.to_radians()) * Vec3::X);
+        // The vision axis o is F_o's thrust axis (the heading pitched by Eq. 3), as the
+        // calibrated preset was fitted with, not the drawn body's (docs/model.md).
+        let forward = heading * (Quat::from_rotation_z(wing_pitch.to_radians()) * Vec3::X);
         let d0 = self.flight.d0;
         let mut gamma = 1.0f32;
         let mut nearest = f32::INFINITY;
@@ -365,6 +401,7 @@ impl Model for BeeModel {
                 b.climb_deg + (elevation_deg(out.c.vel) - b.climb_deg) * self.flight.yaw_blend;
         }
         out.pitch_deg = out.climb_deg + wing_pitch - oscillation::MEAN_PITCH_DEG;
+        self.touch_down(cx, i, &mut out, ri);
         out.mean_pos = b.mean_pos + (out.c.pos - b.mean_pos) * self.sway_blend;
         out.prev_attitude = (c.yaw, b.pitch_deg, b.roll_deg);
         out
@@ -385,6 +422,67 @@ impl Model for BeeModel {
         channels[0] = b.pitch_deg;
         channels[1] = b.roll_deg;
         channels[2] = (b.c.pos - b.mean_pos).dot(pose.heading * Vec3::Z);
+        channels[3] = b.state;
+    }
+}
+
+impl BeeModel {
+    /// After a flying substep: lands the bee on a target with `land = true` whose surface
+    /// its body touches (once it may land again), and records hovering.
+    fn touch_down(&self, cx: &Context, i: usize, out: &mut Bee, ri: f32) {
+        out.timer = (out.timer - cx.dt).max(0.0);
+        out.state = if out.c.vel.length() < HOVER_SPEED {
+            HOVERING
+        } else {
+            FLYING
+        };
+        if out.timer > 0.0 {
+            return;
+        }
+        for &ti in &self.flight.targets {
+            let t = &cx.targets[ti];
+            let r = out.c.pos - t.center;
+            if !t.land || r.length() - t.radius - ri > TOUCH_DOWN_M {
+                continue;
+            }
+            // On the surface, never inside: the body rests on the target's sphere.
+            out.perch = normalize_or(r, Vec3::Y) * (t.radius + ri);
+            out.perch_target = ti as f32;
+            out.c.pos = t.center + out.perch;
+            out.c.vel = Vec3::ZERO;
+            out.state = LANDED;
+            let u = cx.rng(0x1A4D, i).f32();
+            out.timer = t.stay.0 + (t.stay.1 - t.stay.0) * u;
+            out.mean_pos = out.c.pos;
+            return;
+        }
+    }
+
+    /// A landed bee: it sits still on its target (moving with it), level, until its stay
+    /// is over, then takes off away from the target's surface at half its cruising speed.
+    fn perched(&self, cx: &Context, b: &Bee) -> Bee {
+        let t = &cx.targets[b.perch_target as usize];
+        let mut out = *b;
+        out.prev_attitude = (b.c.yaw, b.pitch_deg, b.roll_deg);
+        out.c.pos = t.center + b.perch;
+        out.mean_pos = out.c.pos;
+        out.pitch_deg = b.pitch_deg * (1.0 - self.roll_blend);
+        out.roll_deg = b.roll_deg * (1.0 - self.roll_blend);
+        out.climb_deg = out.pitch_deg;
+        out.timer = b.timer - cx.dt;
+        if out.timer > 0.0 {
+            out.c.vel = Vec3::ZERO;
+            return out;
+        }
+        let away = normalize_or(b.perch, Vec3::Y);
+        out.c.vel = away * (0.5 * b.c.speed);
+        let horizontal = Vec3::new(away.x, 0.0, away.z);
+        if horizontal.length() > 0.1 {
+            out.c.yaw = math::yaw_of(horizontal);
+        }
+        out.state = FLYING;
+        out.timer = TAKE_OFF_S;
+        out
     }
 }
 
