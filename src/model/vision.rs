@@ -86,12 +86,22 @@ pub fn side(o: Vec3, r_e: Vec3) -> f32 {
 
 /// Eq. 6 as the text describes it: the roll grows as the bee approaches (largest at the
 /// surface, d = 0) and fades towards the threshold d0: θ = sign(y) θmax exp(−½ (d/σ)²)
-/// with σ = d0 (61 % of θmax, 27°, when first seen at d0; 88 % at d0/2): above the ±19°
-/// of Eq. 4's rocking from the moment it starts, so the avoidance stands out.
+/// with σ = 0.6 d0 (a quarter of θmax at d0, 70 % at d0/2). This roll drives the sway
+/// force; the body is drawn banking further ([`drawn_bank_deg`]).
 /// Positive roll drops the right wing, so the sway force (Eq. 2) pushes the bee right, away
 /// from an obstacle on its left.
 #[inline]
 pub fn avoid_roll_deg(y: f32, d: f32, d0: f32, roll_max_deg: f32) -> f32 {
+    let sign = if y >= 0.0 { 1.0 } else { -1.0 };
+    let x = d.max(0.0) / (0.6 * d0);
+    sign * roll_max_deg * (-0.5 * x * x).exp()
+}
+
+/// The bank the body is drawn with while avoiding: Eq. 6 with σ = d0 (61 % of θmax, 27°,
+/// when first seen at d0; 88 % at d0/2), above the ±19° of Eq. 4's rocking from the moment
+/// it starts, so that the avoidance reads on screen (docs/model.md).
+#[inline]
+pub fn drawn_bank_deg(y: f32, d: f32, d0: f32, roll_max_deg: f32) -> f32 {
     let sign = if y >= 0.0 { 1.0 } else { -1.0 };
     let x = d.max(0.0) / d0;
     sign * roll_max_deg * (-0.5 * x * x).exp()

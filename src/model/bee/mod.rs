@@ -58,6 +58,8 @@ pub struct Bee {
     /// 1 while banking away from an obstacle seen and not yet passed, else 0 (an f32 so
     /// that the state stays plain 4-byte words for checkpoints).
     banking: f32,
+    /// Body roll as drawn, degrees: `roll_deg` except while banking away from an obstacle.
+    drawn_roll_deg: f32,
     /// Body pitch as drawn, degrees (nose up positive).
     pitch_deg: f32,
     roll_deg: f32,
@@ -93,7 +95,7 @@ impl Agent for Bee {
         if velocity.length() > 0.02 {
             self.climb_deg = elevation_deg(velocity);
         }
-        self.prev_attitude = (self.c.yaw, self.pitch_deg, self.roll_deg);
+        self.prev_attitude = (self.c.yaw, self.pitch_deg, self.drawn_roll_deg);
     }
 }
 
@@ -200,6 +202,7 @@ impl Model for BeeModel {
             mean_pos: c.pos,
             climb_deg,
             banking: 0.0,
+            drawn_roll_deg: roll_deg,
             state: FLYING,
             timer: 0.0,
             perch: Vec3::ZERO,
@@ -308,7 +311,7 @@ impl Model for BeeModel {
         let mut gamma = 1.0f32;
         let mut nearest = f32::INFINITY;
         let mut nearest_any = f32::INFINITY;
-        let (mut nearest_bank, mut bank) = (f32::INFINITY, None::<f32>);
+        let (mut nearest_bank, mut bank, mut held) = (f32::INFINITY, None::<f32>, None::<f32>);
         // While avoiding an obstacle it sees: the horizontal way out, away from every
         // obstacle within d0 (seen or not, so that a corner's way out is its diagonal).
         let mut steer = Avoidance::default();
@@ -325,15 +328,23 @@ impl Model for BeeModel {
                 nearest = d;
                 roll_target =
                     vision::avoid_roll_deg(vision::side(forward, r_e), d, d0, self.roll_max);
+                bank = Some(vision::drawn_bank_deg(
+                    vision::side(forward, r_e),
+                    d,
+                    d0,
+                    self.roll_max,
+                ));
                 gamma = vision::ramp((d / d0).max(0.0)).abs();
                 steer.avoiding = true;
             }
             // One that has left the view to the side but is not yet abeam (a shaft being
             // passed) keeps the bank until it is: the bee levels out once the obstacle is
             // avoided, not as soon as its nose turns away from it (docs/model.md).
-            if d < d0 && d < nearest_bank && forward.dot(r_e) > 0.0 {
+            // Only an obstacle off to the side (a floor or a wall dead ahead has no side).
+            let beside = vision::side(forward, r_e).abs() > 0.5 * r_e.length();
+            if !steer.avoiding && d < d0 && d < nearest_bank && beside && forward.dot(r_e) > 0.0 {
                 nearest_bank = d;
-                bank = Some(vision::avoid_roll_deg(
+                held = Some(vision::drawn_bank_deg(
                     vision::side(forward, r_e),
                     d,
                     d0,
@@ -341,15 +352,19 @@ impl Model for BeeModel {
                 ));
             }
         }
-        // Banking: 1 from the moment an obstacle is seen until it is abeam or beyond d0.
-        out.banking = if steer.avoiding {
+        // The drawn bank: 1 from the moment an obstacle is seen until it is abeam or
+        // beyond d0. It is drawn only; the sway force keeps Eq. 6's roll (docs/model.md).
+        let mut drawn_target = roll_target;
+        out.banking = if let Some(r) = bank {
+            drawn_target = r;
             1.0
-        } else if let (Some(r), true) = (bank, b.banking > 0.5) {
-            roll_target = r;
+        } else if let (Some(r), true) = (held, b.banking > 0.5) {
+            drawn_target = r;
             1.0
         } else {
             0.0
         };
+        out.drawn_roll_deg = b.drawn_roll_deg + (drawn_target - b.drawn_roll_deg) * self.roll_blend;
         out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * self.roll_blend;
         let f_o = oscillation::accel(
             wing_pitch,
@@ -403,12 +418,12 @@ impl Model for BeeModel {
         out.pitch_deg = out.climb_deg + wing_pitch - oscillation::MEAN_PITCH_DEG;
         self.touch_down(cx, i, &mut out, ri);
         out.mean_pos = b.mean_pos + (out.c.pos - b.mean_pos) * self.sway_blend;
-        out.prev_attitude = (c.yaw, b.pitch_deg, b.roll_deg);
+        out.prev_attitude = (c.yaw, b.pitch_deg, b.drawn_roll_deg);
         out
     }
 
     fn pose(&self, b: &Bee, dt: f32) -> Pose {
-        let orientation = attitude(b.c.yaw, b.pitch_deg, b.roll_deg);
+        let orientation = attitude(b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
         let (y, p, r) = b.prev_attitude;
         Pose {
             orientation,
@@ -420,7 +435,7 @@ impl Model for BeeModel {
 
     fn record(&self, b: &Bee, pose: &Pose, channels: &mut [f32]) {
         channels[0] = b.pitch_deg;
-        channels[1] = b.roll_deg;
+        channels[1] = b.drawn_roll_deg;
         channels[2] = (b.c.pos - b.mean_pos).dot(pose.heading * Vec3::Z);
         channels[3] = b.state;
     }
@@ -463,11 +478,12 @@ impl BeeModel {
     fn perched(&self, cx: &Context, b: &Bee) -> Bee {
         let t = &cx.targets[b.perch_target as usize];
         let mut out = *b;
-        out.prev_attitude = (b.c.yaw, b.pitch_deg, b.roll_deg);
+        out.prev_attitude = (b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
         out.c.pos = t.center + b.perch;
         out.mean_pos = out.c.pos;
         out.pitch_deg = b.pitch_deg * (1.0 - self.roll_blend);
         out.roll_deg = b.roll_deg * (1.0 - self.roll_blend);
+        out.drawn_roll_deg = b.drawn_roll_deg * (1.0 - self.roll_blend);
         out.climb_deg = out.pitch_deg;
         out.timer = b.timer - cx.dt;
         if out.timer > 0.0 {
