@@ -497,6 +497,42 @@ fn a_normal_belongs_to_a_surface_target_and_is_not_zero() {
 }
 
 #[test]
+fn landing_keys_belong_to_nests_and_flowers() {
+    let err = refuse("[[swarm]]\ncount = 3\n[[target]]\nposition = [0, 1, 0]\nland = true\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:5:8:",
+            "key `target[0].land`",
+            "bees cannot land on an attractor",
+            "hint: `land = true` is for a nest or a flower",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"flower\"\nposition = [0, 1, 0]\nstay = [2, 6]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:8:",
+            "key `target[0].stay`",
+            "this target has no `land = true`",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"flower\"\nposition = [0, 1, 0]\nland = true\nstay = [6, 2]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:7:8:",
+            "key `target[0].stay`",
+            "expected [min, max] seconds with 0 <= min <= max <= 3600, found [6.0, 2.0]",
+        ],
+    );
+}
+
+#[test]
 fn preset_files_missing_or_bad() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();

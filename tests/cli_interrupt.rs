@@ -166,11 +166,11 @@ fn many_swarms_bake_under_a_small_open_file_limit() {
     );
     let usda = std::fs::read_to_string(p.join("out/many.usda")).unwrap();
     assert_eq!(usda.matches("point3f[] positions.timeSamples").count(), 150);
-    // Eight sampled attributes a swarm: positions, orientations, velocities, angular
-    // velocities, extent, and the primvars pitch, roll and sway.
+    // Nine sampled attributes a swarm: positions, orientations, velocities, angular
+    // velocities, extent, and the primvars pitch, roll, sway and state.
     assert_eq!(
         usda.matches("            4: [").count(),
-        150 * 8,
+        150 * 9,
         "every swarm and attribute at frame 4"
     );
 }

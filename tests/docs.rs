@@ -69,7 +69,7 @@ fn models_json_lists_every_model_with_its_parameters_and_presets() {
     assert_eq!(names(bee, "presets"), ["nest", "grassland", "optimized"]);
     // A preset's values are every parameter's value under it.
     assert_eq!(bee["presets"][1]["values"]["kappa2"], 5.0);
-    assert_eq!(names(bee, "channels"), ["pitch", "roll", "sway"]);
+    assert_eq!(names(bee, "channels"), ["pitch", "roll", "sway", "state"]);
     let curl = names(model("curl"), "params");
     assert!(
         curl.contains(&"speed") && !curl.contains(&"kappa1"),

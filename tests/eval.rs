@@ -411,7 +411,7 @@ fn plot_writes_a_valid_deterministic_png() {
 
 #[test]
 fn a_shot_mixing_models_bakes_empty_channel_cells_that_eval_reads() {
-    // Bees record pitch, roll and sway; curl agents record none.
+    // Bees record pitch, roll, sway and state; curl agents record none.
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
         dir.path().join("mix.toml"),
@@ -430,12 +430,12 @@ fn a_shot_mixing_models_bakes_empty_channel_cells_that_eval_reads() {
     assert_eq!(lines.next().unwrap(), beeswarm::export::csv::HEADER);
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), 7 * 12);
-    // Ids 0–3 are bees (every cell filled), 4–6 curl agents (the three channels empty).
+    // Ids 0–3 are bees (every cell filled), 4–6 curl agents (the four channels empty).
     for row in &rows {
         let cells: Vec<&str> = row.split(',').collect();
         let id: u64 = cells[0].parse().unwrap();
         let empty = cells[13..].iter().filter(|c| c.is_empty()).count();
-        assert_eq!(empty, if id < 4 { 0 } else { 3 }, "{row}");
+        assert_eq!(empty, if id < 4 { 0 } else { 4 }, "{row}");
     }
     let ds = beeswarm::eval::tracks::read(&path).unwrap();
     assert_eq!(ds.tracks.len(), 7);

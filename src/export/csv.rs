@@ -3,7 +3,7 @@
 //! Columns: `id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw`, then one column per channel the
 //! shot's models record (`SwarmMeta::channels`): the union over the swarms, in order of
 //! first appearance; a swarm that does not record a channel leaves its cells empty. A
-//! honeybee shot: `…,qw,pitch,roll,sway` ([`HEADER`]). Metres, seconds, metres per
+//! honeybee shot: `…,qw,pitch,roll,sway,state` ([`HEADER`]). Metres, seconds, metres per
 //! second; Y-up right-handed; quaternion (x, y, z, w) body → world; channels in their own
 //! units (honeybee: pitch and roll in degrees, sway in metres). Floats use the shortest
 //! text that reads back exactly.
@@ -20,7 +20,7 @@ pub const BASE_HEADER: &str = "id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw";
 
 /// The header of a shot whose swarms all record the honeybee channels
 /// (`species::BEE_CHANNELS`).
-pub const HEADER: &str = "id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw,pitch,roll,sway";
+pub const HEADER: &str = "id,frame,time,x,y,z,vx,vy,vz,qx,qy,qz,qw,pitch,roll,sway,state";
 
 /// The channel columns of a shot: every channel name of every swarm, in order of first
 /// appearance.
@@ -202,7 +202,7 @@ mod tests {
         let text = bake(&m);
         assert_eq!(
             text,
-            format!("{HEADER}\n100,1,0,1,2,-0.5,1,0,0,0,0,0,1,0.5,10.5,20.5\n")
+            format!("{HEADER}\n100,1,0,1,2,-0.5,1,0,0,0,0,0,1,0.5,10.5,20.5,30.5\n")
         );
     }
 
@@ -223,10 +223,10 @@ mod tests {
         assert_eq!(
             lines[1..],
             [
-                "100,1,0,1,2,-0.5,1,0,0,0,0,0,1,0.5,10.5,20.5,",
-                "101,1,0,1,2,-0.5,1,0,0,0,0,0,1,1.5,11.5,21.5,",
+                "100,1,0,1,2,-0.5,1,0,0,0,0,0,1,0.5,10.5,20.5,30.5,",
+                "101,1,0,1,2,-0.5,1,0,0,0,0,0,1,1.5,11.5,21.5,31.5,",
                 // roll is the flies' second channel, stroke their first
-                "200,1,0,1,2,-0.5,1,0,0,0,0,0,1,,10.5,,0.5",
+                "200,1,0,1,2,-0.5,1,0,0,0,0,0,1,,10.5,,,0.5",
             ]
         );
         // tests/eval.rs reads such a file back with `beeswarm eval`'s reader.

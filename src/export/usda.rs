@@ -1433,7 +1433,7 @@ mod tests {
     fn swarm_frame(count: usize, frame: i32, first_id: u64) -> SwarmFrame {
         let t = frame as f32 * 0.1;
         let mut s = SwarmFrame {
-            channels: vec![Vec::new(); 3],
+            channels: vec![Vec::new(); crate::species::BEE_CHANNELS.len()],
             ..Default::default()
         };
         for i in 0..count {
@@ -1448,6 +1448,7 @@ mod tests {
             s.channels[0].push(17.19 * a.sin());
             s.channels[1].push(-3.0);
             s.channels[2].push(1e-7 * i as f32);
+            s.channels[3].push((i % 3) as f32);
             s.angular_velocity_deg.push(Vec3::new(0.0, 57.3, 1.5));
             s.scale.push(1.0 + 0.01 * i as f32);
         }

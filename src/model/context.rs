@@ -80,6 +80,9 @@ pub struct TargetNow {
     pub reach: f32,
     /// Radius of the target's body, m.
     pub radius: f32,
+    /// Bees land on it, and stay a time from this range, seconds (`Target::land`).
+    pub land: bool,
+    pub stay: (f32, f32),
     /// Static virtual particles on the body (offsets from `center`), for models that
     /// feel them (paper 000 Sec. V-B); empty for targets without a body.
     pub particles: Vec<Vec3>,

@@ -192,9 +192,10 @@ impl Flight {
         let dt = cx.dt;
         let ri = self.body_radius(b.size);
         let a = finite_or_zero(a + a_col);
-        let mut vel = b.vel + a * dt;
+        let dv = a * dt;
+        let mut vel = b.vel + dv;
         for q in cx.obstacle_queries(b.pos) {
-            vel = vision::tune_velocity(vel, q.normal, q.distance - ri, self.d0);
+            vel = vision::tune_velocity(vel, dv, q.normal, q.distance - ri, self.d0, dt);
         }
         let max_speed = 4.0 * b.speed + 2.0;
         if vel.length() > max_speed {

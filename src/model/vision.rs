@@ -40,17 +40,42 @@ pub fn surface_speed_factor(d: f32, ratio: f32, length: f32) -> f32 {
     ratio + (1.0 - ratio) * (1.0 - (-d.max(0.0) / length.max(1e-6)).exp())
 }
 
+/// Substep, s, at which Eq. 5 is applied once as the paper writes it: the calibrated
+/// `mosquito_cage` shot's (50 fps × 4 substeps), so that its preset keeps its score.
+pub const EQ5_STEP_S: f32 = 0.005;
+
 /// Eq. 5, read so that the normal component vanishes at the surface while the tangential
 /// (slipping) component is kept: u* = u − (1 − γ) n (n·u), γ = |ramp(d/d0)|, applied only
 /// while the bee moves towards the surface (docs/model.md explains the reading).
+///
+/// The paper applies it once per time step, which brakes harder the more steps there are.
+/// Here it is a rate: the normal velocity decays as e^(−λt) with λ = ln(1/γ) / [`EQ5_STEP_S`]
+/// (one application of the paper's factor γ every 5 ms), integrated exactly over the substep
+/// of `dt` seconds together with the normal part of the velocity change `dv` the forces
+/// made in it: uₙ' = (uₙ − dvₙ) k + dvₙ (1 − k) / ln(1/k), k = γ^(dt/5 ms). So 2 or 16
+/// substeps brake alike, and a bee pressed at a surface creeps at the same speed.
 #[inline]
-pub fn tune_velocity(u: Vec3, n: Vec3, d: f32, d0: f32) -> Vec3 {
+pub fn tune_velocity(u: Vec3, dv: Vec3, n: Vec3, d: f32, d0: f32, dt: f32) -> Vec3 {
     let un = n.dot(u);
     if un >= 0.0 || d >= d0 {
         return u;
     }
     let gamma = ramp((d / d0).max(0.0)).abs();
-    u - n * ((1.0 - gamma) * un)
+    let dvn = n.dot(dv);
+    let tuned = if gamma > 0.0 {
+        let log_k = gamma.ln() * (dt / EQ5_STEP_S);
+        let k = log_k.exp();
+        // (1 − k) / ln(1/k), → 1 as k → 1.
+        let gain = if log_k < -1e-4 {
+            (1.0 - k) / -log_k
+        } else {
+            1.0 + 0.5 * log_k
+        };
+        (un - dvn) * k + dvn * gain
+    } else {
+        0.0
+    };
+    u - n * (un - tuned)
 }
 
 /// Eq. 7: y = ŷ · (o × r_e). Positive when the obstacle is on the bee's left.
@@ -61,13 +86,24 @@ pub fn side(o: Vec3, r_e: Vec3) -> f32 {
 
 /// Eq. 6 as the text describes it: the roll grows as the bee approaches (largest at the
 /// surface, d = 0) and fades towards the threshold d0: θ = sign(y) θmax exp(−½ (d/σ)²)
-/// with σ = 0.6 d0 (a quarter of θmax at d0, 70 % at d0/2).
+/// with σ = 0.6 d0 (a quarter of θmax at d0, 70 % at d0/2). This roll drives the sway
+/// force; the body is drawn banking further ([`drawn_bank_deg`]).
 /// Positive roll drops the right wing, so the sway force (Eq. 2) pushes the bee right, away
 /// from an obstacle on its left.
 #[inline]
 pub fn avoid_roll_deg(y: f32, d: f32, d0: f32, roll_max_deg: f32) -> f32 {
     let sign = if y >= 0.0 { 1.0 } else { -1.0 };
     let x = d.max(0.0) / (0.6 * d0);
+    sign * roll_max_deg * (-0.5 * x * x).exp()
+}
+
+/// The bank the body is drawn with while avoiding: Eq. 6 with σ = d0 (61 % of θmax, 27°,
+/// when first seen at d0; 88 % at d0/2), above the ±19° of Eq. 4's rocking from the moment
+/// it starts, so that the avoidance reads on screen (docs/model.md).
+#[inline]
+pub fn drawn_bank_deg(y: f32, d: f32, d0: f32, roll_max_deg: f32) -> f32 {
+    let sign = if y >= 0.0 { 1.0 } else { -1.0 };
+    let x = d.max(0.0) / d0;
     sign * roll_max_deg * (-0.5 * x * x).exp()
 }
 
@@ -88,11 +124,43 @@ mod tests {
     fn tuned_velocity_has_no_normal_component_at_the_surface_and_keeps_slip() {
         let n = Vec3::X;
         let u = Vec3::new(-2.0, 0.0, 1.0);
-        let at = tune_velocity(u, n, 0.0, 0.1);
+        let dt = EQ5_STEP_S;
+        let z = Vec3::ZERO;
+        let at = tune_velocity(u, z, n, 0.0, 0.1, dt);
         assert!(at.x.abs() < 1e-6 && (at.z - 1.0).abs() < 1e-6);
-        assert_eq!(tune_velocity(u, n, 0.2, 0.1), u);
+        assert_eq!(tune_velocity(u, z, n, 0.2, 0.1, dt), u);
         // Moving away is never altered.
-        assert_eq!(tune_velocity(-u, n, 0.01, 0.1), -u);
+        assert_eq!(tune_velocity(-u, z, n, 0.01, 0.1, dt), -u);
+        // With no force, one reference step is the paper's single application, and two
+        // half steps brake exactly as much as one whole.
+        let one = tune_velocity(u, z, n, 0.05, 0.1, dt);
+        assert!((one.x - u.x * ramp(0.5)).abs() < 1e-6);
+        let half = tune_velocity(
+            tune_velocity(u, z, n, 0.05, 0.1, dt / 2.0),
+            z,
+            n,
+            0.05,
+            0.1,
+            dt / 2.0,
+        );
+        assert!((half - one).length() < 1e-6, "{half} {one}");
+        // Pressed on by a steady force, the normal speed settles where the decay balances
+        // it, dvₙ/dt / λ, whatever the step.
+        let settle = |dt: f32| {
+            let (mut v, dv) = (Vec3::ZERO, -n * (3.0 * dt));
+            for _ in 0..(1.0 / dt) as usize {
+                v = tune_velocity(v + dv, dv, n, 0.05, 0.1, dt);
+            }
+            v.x
+        };
+        let lambda = -ramp(0.5).ln() / EQ5_STEP_S;
+        for dt in [0.0025, 0.005, 0.01, 0.02] {
+            assert!(
+                (settle(dt) + 3.0 / lambda).abs() < 1e-4,
+                "dt {dt}: {}",
+                settle(dt)
+            );
+        }
     }
 
     #[test]

@@ -40,6 +40,8 @@ pub const BEE_WING_BEAT_HZ: f64 = 230.0;
 
 /// Per target kind: (radius m, strength m/s²).
 pub const NEST: (f64, f64) = (0.08, 3.0);
+/// How long a bee stays on a target it lands on, seconds: drawn uniformly from this range.
+pub const STAY_S: (f64, f64) = (2.0, 6.0);
 pub const FLOWER: (f64, f64) = (0.03, 2.0);
 pub const ATTRACTOR: (f64, f64) = (0.05, 2.0);
 pub const SURFACE: (f64, f64) = (0.05, 1.0);

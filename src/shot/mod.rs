@@ -122,6 +122,10 @@ pub struct Target {
     pub normal: Vec3,
     /// Indices of the swarms it attracts (all when the shot names none).
     pub swarms: Vec<usize>,
+    /// Bees land on it (a nest or flower with `land = true`), staying a time drawn
+    /// uniformly from `stay` (seconds, min ≤ max) before taking off again.
+    pub land: bool,
+    pub stay: (f32, f32),
 }
 
 impl Target {

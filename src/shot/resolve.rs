@@ -1399,6 +1399,39 @@ fn resolve_target(
             })
             .collect::<Result<_, _>>()?,
     };
+    let land = rt.land.unwrap_or(false);
+    if land && !kind.has_body() {
+        return Err(cx.hint(
+            &k("land"),
+            format!("bees cannot land on {}", with_article(&kind_name)),
+            "`land = true` is for a nest or a flower, which have a body to land on",
+        ));
+    }
+    let stay = match &rt.stay {
+        None => d::STAY_S,
+        Some(_) if !land => {
+            return Err(cx.hint(
+                &k("stay"),
+                "`stay` is how long bees stay after landing, and this target has no `land = true`",
+                "add `land = true` to let bees land on it",
+            ));
+        }
+        Some(v) => match v.as_slice() {
+            [lo, hi]
+                if lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo <= hi && *hi <= 3600.0 =>
+            {
+                (*lo, *hi)
+            }
+            _ => {
+                return Err(cx.err(
+                    &k("stay"),
+                    format!(
+                        "expected [min, max] seconds with 0 <= min <= max <= 3600, found {v:?}"
+                    ),
+                ));
+            }
+        },
+    };
     Ok(Target {
         name,
         kind,
@@ -1408,6 +1441,8 @@ fn resolve_target(
         reach,
         normal,
         swarms: swarm_ids,
+        land,
+        stay: (stay.0 as f32, stay.1 as f32),
     })
 }
 

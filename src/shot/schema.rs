@@ -131,6 +131,8 @@ pub struct RawTarget {
     /// spread evenly along it (FASTSWARM's key points, paper 003 Eq. 15).
     pub curve: Option<Vec<V3>>,
     pub samples: Option<i64>,
+    pub land: Option<bool>,
+    pub stay: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

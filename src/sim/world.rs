@@ -377,6 +377,8 @@ impl Simulation {
                 strength: t.strength,
                 reach: t.reach,
                 radius: t.radius,
+                land: t.land,
+                stay: t.stay,
                 particles: if t.kind.has_body() && spacing.is_finite() {
                     geometry::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
                 } else {

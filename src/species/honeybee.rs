@@ -14,7 +14,7 @@ use super::{Alpha, Channel, Drive, Material, Part, PartMesh, Species};
 pub use mesh::BeeMesh;
 
 /// What the bee model records per bee each frame.
-pub const BEE_CHANNELS: [Channel; 3] = [
+pub const BEE_CHANNELS: [Channel; 4] = [
     Channel {
         name: "pitch",
         unit: "deg",
@@ -29,6 +29,11 @@ pub const BEE_CHANNELS: [Channel; 3] = [
         name: "sway",
         unit: "m",
         doc: "Lateral offset from the mean path, metres, along the heading's +Z.",
+    },
+    Channel {
+        name: "state",
+        unit: "1",
+        doc: "0 flying, 1 hovering (slower than 0.1 m/s), 2 landed on a target with `land = true`.",
     },
 ];
 

@@ -38,7 +38,7 @@ fn synth(meta: &CacheMeta, frame: i32, varying_scale: bool) -> Vec<SwarmFrame> {
         .iter()
         .map(|sm| {
             let mut s = SwarmFrame {
-                channels: vec![Vec::new(); 3],
+                channels: vec![Vec::new(); crate::species::BEE_CHANNELS.len()],
                 ..Default::default()
             };
             for i in 0..sm.count {
@@ -64,6 +64,7 @@ fn synth(meta: &CacheMeta, frame: i32, varying_scale: bool) -> Vec<SwarmFrame> {
                 s.channels[0].push(pitch);
                 s.channels[1].push(roll);
                 s.channels[2].push(0.01 * (5.0 * t + phase).sin());
+                s.channels[3].push(0.0);
                 s.angular_velocity_deg.push(Vec3::ZERO);
                 let scale = 0.9 + 0.1 * (i % 3) as f32;
                 let grow = if varying_scale && i == 0 { t } else { 0.0 };

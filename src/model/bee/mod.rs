@@ -28,6 +28,22 @@ use kernels::Kernels;
 const ROLL_LAG_S: f32 = 0.04;
 const SWAY_PATH_S: f32 = 0.3;
 
+/// Values of the `state` channel.
+pub const FLYING: f32 = 0.0;
+pub const HOVERING: f32 = 1.0;
+pub const LANDED: f32 = 2.0;
+/// Speed, m/s, below which a flying bee is recorded as hovering.
+const HOVER_SPEED: f32 = 0.1;
+/// A bee touches down on a target with `land = true` once its body is this close to the
+/// target's surface, m.
+const TOUCH_DOWN_M: f32 = 0.02;
+/// After taking off a bee flies at least this long, s, before it can land again.
+const TAKE_OFF_S: f32 = 1.0;
+/// A bee that may land and has slowed below this speed, m/s, within the reach of a
+/// `land = true` target's particles comes in to land: that target no longer pushes it
+/// back, and its pull brings the bee down onto the surface.
+const LANDING_SPEED: f32 = 0.5;
+
 /// One bee's state.
 #[derive(Clone, Copy, Debug)]
 pub struct Bee {
@@ -36,11 +52,28 @@ pub struct Bee {
     wander: f32,
     /// Exponentially smoothed path; sway is the lateral offset from it.
     mean_pos: Vec3,
+    /// Elevation of the direction of travel, degrees (up positive), followed with the
+    /// heading's lag: the body's pitch is this plus Eq. 3's oscillation about its mean.
+    climb_deg: f32,
+    /// 1 while banking away from an obstacle seen and not yet passed, else 0 (an f32 so
+    /// that the state stays plain 4-byte words for checkpoints).
+    banking: f32,
+    /// Body roll as drawn, degrees: `roll_deg` except while banking away from an obstacle.
+    drawn_roll_deg: f32,
+    /// Body pitch as drawn, degrees (nose up positive).
     pitch_deg: f32,
     roll_deg: f32,
     /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
     /// velocity is the rotation between the two attitudes over that substep.
     prev_attitude: (f32, f32, f32),
+    /// `FLYING`, `HOVERING` or `LANDED` (recorded as the `state` channel).
+    state: f32,
+    /// Landed: seconds left before taking off. Flying: seconds before it may land again.
+    timer: f32,
+    /// Landed: the body's offset from the centre of the target it sits on, and that
+    /// target's index (as f32, so that the state stays plain 4-byte words).
+    perch: Vec3,
+    perch_target: f32,
     /// Oscillation phases in the maneuvering functions' own time units.
     phase_pitch: f32,
     phase_roll: f32,
@@ -59,7 +92,10 @@ impl Agent for Bee {
     fn place(&mut self, position: Vec3, velocity: Vec3) {
         self.c.place(position, velocity);
         self.mean_pos = position;
-        self.prev_attitude = (self.c.yaw, self.pitch_deg, self.roll_deg);
+        if velocity.length() > 0.02 {
+            self.climb_deg = elevation_deg(velocity);
+        }
+        self.prev_attitude = (self.c.yaw, self.pitch_deg, self.drawn_roll_deg);
     }
 }
 
@@ -83,6 +119,7 @@ pub struct BeeModel {
     wander_kick: f32,
     surface_speed: f32,
     surface_speed_distance: f32,
+    arrival_speed: f32,
     time_unit: f64,
     stiffness: f32,
     mass: f32,
@@ -127,6 +164,7 @@ impl Model for BeeModel {
             wander_kick: (1.0 - (-2.0 * dt / p.speed_wander_time).exp()).sqrt() as f32,
             surface_speed: p.surface_speed as f32,
             surface_speed_distance: p.surface_speed_distance as f32,
+            arrival_speed: p.arrival_speed as f32,
             time_unit: p.oscillation_time_unit,
             stiffness: p.pressure_stiffness as f32,
             mass: s.body.mass,
@@ -154,12 +192,21 @@ impl Model for BeeModel {
         let c = Cruiser::new(start, self.speed);
         let phase_pitch = self.phase_spread * rng.f32() * oscillation::PITCH_PERIOD as f32;
         let phase_roll = self.phase_spread * rng.f32() * oscillation::ROLL_PERIOD as f32;
-        let pitch_deg = oscillation::pitch_deg(phase_pitch as f64);
+        let climb_deg = elevation_deg(c.vel);
+        let pitch_deg =
+            climb_deg + oscillation::pitch_deg(phase_pitch as f64) - oscillation::MEAN_PITCH_DEG;
         let roll_deg = oscillation::roll_deg(phase_roll as f64);
         Bee {
             c,
             wander: rng.gaussian(),
             mean_pos: c.pos,
+            climb_deg,
+            banking: 0.0,
+            drawn_roll_deg: roll_deg,
+            state: FLYING,
+            timer: 0.0,
+            perch: Vec3::ZERO,
+            perch_target: 0.0,
             pitch_deg,
             roll_deg,
             prev_attitude: (c.yaw, pitch_deg, roll_deg),
@@ -196,6 +243,9 @@ impl Model for BeeModel {
     }
 
     fn step(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
+        if b.state == LANDED {
+            return self.perched(cx, b);
+        }
         let c = &b.c;
         let ri = self.flight.body_radius(c.size);
         let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
@@ -225,6 +275,9 @@ impl Model for BeeModel {
             if c.pos.distance(t.center) > t.radius + self.h + ri {
                 continue;
             }
+            if t.land && b.timer <= 0.0 && c.vel.length() < LANDING_SPEED {
+                continue; // coming in to land
+            }
             for off in &t.particles {
                 let r = c.pos - (t.center + *off);
                 // A static particle mirrors the bee's pressure at rest density.
@@ -247,13 +300,18 @@ impl Model for BeeModel {
         let air = c.vel - cx.wind;
         let heading = Quat::from_rotation_y(c.yaw);
         let tt = cx.t / self.time_unit;
-        out.pitch_deg = oscillation::pitch_deg(tt + b.phase_pitch as f64);
+        // Eq. 3's pitch drives the thrust (Eq. 2); the body drawn points along the flight
+        // direction, rocking by Eq. 3's oscillation about it (docs/model.md).
+        let wing_pitch = oscillation::pitch_deg(tt + b.phase_pitch as f64);
         let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
-        let forward = heading * (Quat::from_rotation_z(out.pitch_deg.to_radians()) * Vec3::X);
+        // The vision axis o is F_o's thrust axis (the heading pitched by Eq. 3), as the
+        // calibrated preset was fitted with, not the drawn body's (docs/model.md).
+        let forward = heading * (Quat::from_rotation_z(wing_pitch.to_radians()) * Vec3::X);
         let d0 = self.flight.d0;
         let mut gamma = 1.0f32;
         let mut nearest = f32::INFINITY;
         let mut nearest_any = f32::INFINITY;
+        let (mut nearest_bank, mut bank, mut held) = (f32::INFINITY, None::<f32>, None::<f32>);
         // While avoiding an obstacle it sees: the horizontal way out, away from every
         // obstacle within d0 (seen or not, so that a corner's way out is its diagonal).
         let mut steer = Avoidance::default();
@@ -265,18 +323,51 @@ impl Model for BeeModel {
                 let n = normalize_or(Vec3::new(-r_e.x, 0.0, -r_e.z), Vec3::ZERO);
                 steer.away += n * (1.0 - d.max(0.0) / d0);
             }
-            // The nearest obstacle seen within d0 takes over the roll.
+            // The nearest obstacle seen within d0 takes over the roll and the flight.
             if d < d0 && d < nearest && vision::in_view(forward, r_e, self.fov) {
                 nearest = d;
                 roll_target =
                     vision::avoid_roll_deg(vision::side(forward, r_e), d, d0, self.roll_max);
+                bank = Some(vision::drawn_bank_deg(
+                    vision::side(forward, r_e),
+                    d,
+                    d0,
+                    self.roll_max,
+                ));
                 gamma = vision::ramp((d / d0).max(0.0)).abs();
                 steer.avoiding = true;
             }
+            // One that has left the view to the side but is not yet abeam (a shaft being
+            // passed) keeps the bank until it is: the bee levels out once the obstacle is
+            // avoided, not as soon as its nose turns away from it (docs/model.md).
+            // Only an obstacle off to the side (a floor or a wall dead ahead has no side).
+            let beside = vision::side(forward, r_e).abs() > 0.5 * r_e.length();
+            if !steer.avoiding && d < d0 && d < nearest_bank && beside && forward.dot(r_e) > 0.0 {
+                nearest_bank = d;
+                held = Some(vision::drawn_bank_deg(
+                    vision::side(forward, r_e),
+                    d,
+                    d0,
+                    self.roll_max,
+                ));
+            }
         }
+        // The drawn bank: 1 from the moment an obstacle is seen until it is abeam or
+        // beyond d0. It is drawn only; the sway force keeps Eq. 6's roll (docs/model.md).
+        let mut drawn_target = roll_target;
+        out.banking = if let Some(r) = bank {
+            drawn_target = r;
+            1.0
+        } else if let (Some(r), true) = (held, b.banking > 0.5) {
+            drawn_target = r;
+            1.0
+        } else {
+            0.0
+        };
+        out.drawn_roll_deg = b.drawn_roll_deg + (drawn_target - b.drawn_roll_deg) * self.roll_blend;
         out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * self.roll_blend;
         let f_o = oscillation::accel(
-            out.pitch_deg,
+            wing_pitch,
             out.roll_deg,
             air.length(),
             self.mass,
@@ -293,6 +384,19 @@ impl Model for BeeModel {
                 self.surface_speed,
                 self.surface_speed_distance,
             );
+        // Arriving at a nest or flower the bee slows to a hover (docs/model.md), so that it
+        // does not overshoot and orbit it: the approach and retreat are then the push of
+        // the target's particles against the pull (Sec. V-B).
+        if self.arrival_speed < 1.0 {
+            let mut nearest_target = f32::INFINITY;
+            for &ti in &self.flight.targets {
+                let t = &cx.targets[ti];
+                if t.kind.has_body() {
+                    nearest_target = nearest_target.min(c.pos.distance(t.center) - t.radius);
+                }
+            }
+            pref *= vision::surface_speed_factor(nearest_target, self.arrival_speed, self.h);
+        }
         if self.wander_sigma > 0.0 {
             let mut rng = cx.rng(0x5BEED, i);
             out.wander = b.wander * self.wander_decay + self.wander_kick * rng.gaussian();
@@ -307,13 +411,19 @@ impl Model for BeeModel {
                 - air * drag;
 
         out.c = self.flight.advance(cx, c, a, a_col, steer);
+        if out.c.vel.length() > 0.02 {
+            out.climb_deg =
+                b.climb_deg + (elevation_deg(out.c.vel) - b.climb_deg) * self.flight.yaw_blend;
+        }
+        out.pitch_deg = out.climb_deg + wing_pitch - oscillation::MEAN_PITCH_DEG;
+        self.touch_down(cx, i, &mut out, ri);
         out.mean_pos = b.mean_pos + (out.c.pos - b.mean_pos) * self.sway_blend;
-        out.prev_attitude = (c.yaw, b.pitch_deg, b.roll_deg);
+        out.prev_attitude = (c.yaw, b.pitch_deg, b.drawn_roll_deg);
         out
     }
 
     fn pose(&self, b: &Bee, dt: f32) -> Pose {
-        let orientation = attitude(b.c.yaw, b.pitch_deg, b.roll_deg);
+        let orientation = attitude(b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
         let (y, p, r) = b.prev_attitude;
         Pose {
             orientation,
@@ -325,9 +435,76 @@ impl Model for BeeModel {
 
     fn record(&self, b: &Bee, pose: &Pose, channels: &mut [f32]) {
         channels[0] = b.pitch_deg;
-        channels[1] = b.roll_deg;
+        channels[1] = b.drawn_roll_deg;
         channels[2] = (b.c.pos - b.mean_pos).dot(pose.heading * Vec3::Z);
+        channels[3] = b.state;
     }
+}
+
+impl BeeModel {
+    /// After a flying substep: lands the bee on a target with `land = true` whose surface
+    /// its body touches (once it may land again), and records hovering.
+    fn touch_down(&self, cx: &Context, i: usize, out: &mut Bee, ri: f32) {
+        out.timer = (out.timer - cx.dt).max(0.0);
+        out.state = if out.c.vel.length() < HOVER_SPEED {
+            HOVERING
+        } else {
+            FLYING
+        };
+        if out.timer > 0.0 {
+            return;
+        }
+        for &ti in &self.flight.targets {
+            let t = &cx.targets[ti];
+            let r = out.c.pos - t.center;
+            if !t.land || r.length() - t.radius - ri > TOUCH_DOWN_M {
+                continue;
+            }
+            // On the surface, never inside: the body rests on the target's sphere.
+            out.perch = normalize_or(r, Vec3::Y) * (t.radius + ri);
+            out.perch_target = ti as f32;
+            out.c.pos = t.center + out.perch;
+            out.c.vel = Vec3::ZERO;
+            out.state = LANDED;
+            let u = cx.rng(0x1A4D, i).f32();
+            out.timer = t.stay.0 + (t.stay.1 - t.stay.0) * u;
+            out.mean_pos = out.c.pos;
+            return;
+        }
+    }
+
+    /// A landed bee: it sits still on its target (moving with it), level, until its stay
+    /// is over, then takes off away from the target's surface at half its cruising speed.
+    fn perched(&self, cx: &Context, b: &Bee) -> Bee {
+        let t = &cx.targets[b.perch_target as usize];
+        let mut out = *b;
+        out.prev_attitude = (b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
+        out.c.pos = t.center + b.perch;
+        out.mean_pos = out.c.pos;
+        out.pitch_deg = b.pitch_deg * (1.0 - self.roll_blend);
+        out.roll_deg = b.roll_deg * (1.0 - self.roll_blend);
+        out.drawn_roll_deg = b.drawn_roll_deg * (1.0 - self.roll_blend);
+        out.climb_deg = out.pitch_deg;
+        out.timer = b.timer - cx.dt;
+        if out.timer > 0.0 {
+            out.c.vel = Vec3::ZERO;
+            return out;
+        }
+        let away = normalize_or(b.perch, Vec3::Y);
+        out.c.vel = away * (0.5 * b.c.speed);
+        let horizontal = Vec3::new(away.x, 0.0, away.z);
+        if horizontal.length() > 0.1 {
+            out.c.yaw = math::yaw_of(horizontal);
+        }
+        out.state = FLYING;
+        out.timer = TAKE_OFF_S;
+        out
+    }
+}
+
+/// Elevation of `v` above the horizontal, degrees.
+fn elevation_deg(v: Vec3) -> f32 {
+    v.y.atan2(Vec3::new(v.x, 0.0, v.z).length()).to_degrees()
 }
 
 /// Body orientation from heading (radians) and pitch and roll (degrees).

@@ -36,6 +36,9 @@ pub fn roll_deg(t: f64) -> f32 {
     -0.765 + 18.914 * periodic(t, 38.298, 91.775)
 }
 
+/// Mean of Eq. 3's pitch, degrees: the body's attitude about which it rocks.
+pub const MEAN_PITCH_DEG: f32 = 16.429;
+
 /// Period of Eq. 3 in its own time units (2 × 35.972).
 pub const PITCH_PERIOD: f64 = 2.0 * 35.972;
 /// Period of Eq. 4 in its own time units (2 × 91.775).

@@ -51,6 +51,8 @@ crate::declare_params! {
         attraction: "1", 1.0, [0.0, 100.0], "a factor from 0 to 100";
         /// Acceleration pulling agents back inside the swarm bounds, per metre outside.
         containment: "1/s²", 4.0, [0.0, 1000.0], "an acceleration from 0 to 1000";
+        /// Preferred speed at a nest's or flower's surface, as a fraction of `speed`, recovering over `neighbour_radius` (the reach of its virtual particles): bees slow to a hover as they arrive (1: no slowing).
+        arrival_speed: "1", 0.1, [0.0, 1.0], "a fraction of the speed from 0 to 1";
     }
 }
 
