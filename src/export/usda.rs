@@ -10,7 +10,10 @@
 //!                                  and one primvars:<channel> per channel the model
 //!                                  records ("vertex": per instance; a honeybee: pitch,
 //!                                  roll, sway)
-//!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee)
+//!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee; a flapping
+//!                                  bee: honeybee_0..7 per phase group; a butterfly:
+//!                                  butterfly_0..18 with the wings at -90°..90° of flap,
+//!                                  chosen per frame by a time-sampled protoIndices)
 //!             /<part>              Mesh per part of the species (body, wing_l, wing_r),
 //!                                  real size in metres, body along +X
 //! ```
@@ -59,6 +62,9 @@ enum Attr {
     Velocities,
     AngularVelocities,
     Extent,
+    /// `protoIndices` of a swarm drawn by flap bins (`flap_column`): per instance, the
+    /// prototype of the bin of its recorded flap angle (channel column `.0`).
+    ProtoIndices(usize),
     /// `primvars:<name>` of the swarm's channel with this index.
     Primvar(usize),
 }
@@ -77,7 +83,29 @@ const FIXED_ATTRS: [Attr; 5] = [
 fn attrs(m: &SwarmMeta) -> impl Iterator<Item = Attr> + '_ {
     FIXED_ATTRS
         .into_iter()
+        .chain(flap_column(m).map(Attr::ProtoIndices))
         .chain((0..m.channels.len()).map(Attr::Primvar))
+}
+
+/// The channel column of a swarm whose wings are drawn by flap bins: its species turns
+/// parts by a recorded `flap` channel (the butterfly) and its model records one. USD
+/// instances share their prototypes, so per-instance wing motion is drawn by choosing,
+/// each frame, the prototype posed nearest the recorded angle (`wings::flap_bin`).
+fn flap_column(m: &SwarmMeta) -> Option<usize> {
+    let turns_by_flap = m.species.parts.iter().any(|p| {
+        matches!(
+            p.drive,
+            Drive::Channel {
+                channel: "flap",
+                ..
+            }
+        )
+    });
+    if turns_by_flap {
+        m.channel("flap")
+    } else {
+        None
+    }
 }
 
 impl Attr {
@@ -90,6 +118,7 @@ impl Attr {
             Attr::Velocities => "vector3f[] velocities".into(),
             Attr::AngularVelocities => "vector3f[] angularVelocities".into(),
             Attr::Extent => "float3[] extent".into(),
+            Attr::ProtoIndices(_) => "int[] protoIndices".into(),
             Attr::Primvar(c) => format!("float[] primvars:{}", m.channels[c].name),
         }
     }
@@ -116,6 +145,7 @@ impl Attr {
             }
             Attr::Orientations => 4 * 11 + 8,
             Attr::Extent => 0,
+            Attr::ProtoIndices(_) => 4,
             Attr::Primvar(_) => 16 + 2,
         }
     }
@@ -212,6 +242,19 @@ impl Piece {
                 bad
             }
             Attr::Primvar(c) => floats(out, &s.channels[c][r.clone()]),
+            Attr::ProtoIndices(c) => {
+                let mut ib = itoa::Buffer::new();
+                let mut bad = None;
+                for (i, &v) in r.clone().zip(&s.channels[c][r.clone()]) {
+                    if !v.is_finite() {
+                        bad = Some(i);
+                        break;
+                    }
+                    sep(out, i);
+                    out.extend_from_slice(ib.format(wings::flap_bin(v)).as_bytes());
+                }
+                bad
+            }
             Attr::Extent => {
                 // A bound of every instance under any rotation: the prototype's bound
                 // radius times the instance's scale around its position. Conservative,
@@ -653,17 +696,21 @@ impl UsdaWriter {
             // its int64 bit pattern, which is what USD would read back from binary.
             t.extend_from_slice(ib.format(*id as i64).as_bytes());
         }
-        t.extend_from_slice(b"]\n        int[] protoIndices = [");
-        let phased = self.phased(swarm);
-        for (i, &id) in self.ids[swarm].iter().enumerate() {
-            if i > 0 {
-                t.extend_from_slice(b", ");
-            }
-            // Flapping: the prototype of the bee's phase group, as in glTF.
-            let index = if phased { wings::group(id) } else { 0 };
-            t.extend_from_slice(ib.format(index).as_bytes());
-        }
         t.extend_from_slice(b"]\n");
+        // Flap bins choose the prototype per frame: protoIndices is time-sampled then.
+        if flap_column(m).is_none() {
+            t.extend_from_slice(b"        int[] protoIndices = [");
+            let phased = self.phased(swarm);
+            for (i, &id) in self.ids[swarm].iter().enumerate() {
+                if i > 0 {
+                    t.extend_from_slice(b", ");
+                }
+                // Flapping: the prototype of the bee's phase group, as in glTF.
+                let index = if phased { wings::group(id) } else { 0 };
+                t.extend_from_slice(ib.format(index).as_bytes());
+            }
+            t.extend_from_slice(b"]\n");
+        }
         // Uniform scales, constant through the shot: formatted like a time sample.
         let mut scales = Piece {
             swarm,
@@ -709,10 +756,13 @@ impl UsdaWriter {
         self.wings.flap_hz() > 0.0 && self.protos[swarm].iter().any(|p| p.flap.is_some())
     }
 
-    /// The prototype names of a swarm: `<species>`, or `<species>_<group>` per phase group.
+    /// The prototype names of a swarm: `<species>`, or `<species>_<group>` per phase group,
+    /// or `<species>_<bin>` per flap bin.
     fn proto_names(&self, swarm: usize) -> Vec<String> {
         let sp = self.meta.swarms[swarm].species.name;
-        if self.phased(swarm) {
+        if flap_column(&self.meta.swarms[swarm]).is_some() {
+            (0..wings::FLAP_BINS).map(|k| format!("{sp}_{k}")).collect()
+        } else if self.phased(swarm) {
             (0..wings::PHASES).map(|g| format!("{sp}_{g}")).collect()
         } else {
             vec![sp.to_owned()]
@@ -725,8 +775,8 @@ impl UsdaWriter {
         let names = self.proto_names(swarm);
         for (g, name) in names.iter().enumerate() {
             if g > 0 {
-                // The other phase groups reference the first one's geometry and override
-                // only their wings' turn samples: the meshes are written once.
+                // The other phase groups (flap bins) reference the first one's geometry and
+                // override only their wings' turn samples (turn): the meshes are written once.
                 let _ = write!(
                     s,
                     "\n            def Xform \"{name}\" (\n                prepend references = </{}/{}/Prototypes/{}>\n            )\n            {{\n",
@@ -734,19 +784,28 @@ impl UsdaWriter {
                 );
                 let mut first = true;
                 for part in &self.protos[swarm] {
-                    if let Turn::Sampled(samples) = self.wing_turn(part, Some(g)) {
-                        if !first {
-                            s.push('\n');
-                        }
-                        first = false;
-                        let _ = write!(
-                            s,
-                            "                over \"{}\"\n                {{\n",
-                            part.name
-                        );
-                        turn_samples(&mut s, "                    ", &samples);
-                        s.push_str("                }\n");
+                    let turn = self.part_turn(swarm, part, g);
+                    if let Turn::None = turn {
+                        continue;
                     }
+                    if !first {
+                        s.push('\n');
+                    }
+                    first = false;
+                    let _ = write!(
+                        s,
+                        "                over \"{}\"\n                {{\n",
+                        part.name
+                    );
+                    let ind = "                    ";
+                    match turn {
+                        Turn::Sampled(samples) => turn_samples(&mut s, ind, &samples),
+                        Turn::Still(deg) => {
+                            let _ = writeln!(s, "{ind}float xformOp:rotateX = {}", f32_text(deg));
+                        }
+                        Turn::None => {}
+                    }
+                    s.push_str("                }\n");
                 }
                 s.push_str("            }\n");
                 continue;
@@ -756,8 +815,12 @@ impl UsdaWriter {
                 if k > 0 {
                     s.push('\n');
                 }
-                let flap = self.phased(swarm).then_some(g);
-                mesh_text(&mut s, &self.looks_path(), part, self.wing_turn(part, flap));
+                mesh_text(
+                    &mut s,
+                    &self.looks_path(),
+                    part,
+                    self.part_turn(swarm, part, g),
+                );
             }
             s.push_str("            }\n");
         }
@@ -768,6 +831,17 @@ impl UsdaWriter {
     /// `/<root>/Looks`, where every material of the shot is.
     fn looks_path(&self) -> String {
         format!("/{}/Looks", self.root)
+    }
+
+    /// A part's turn about its hinge in prototype `g` of a swarm: the bin's flap angle for a
+    /// part turned by the `flap` channel of a binned swarm, else as the wing display says.
+    fn part_turn(&self, swarm: usize, part: &ProtoPart, g: usize) -> Turn {
+        match part.channel_flap {
+            Some(sign) if flap_column(&self.meta.swarms[swarm]).is_some() => {
+                Turn::Still(sign * wings::flap_bin_deg(g))
+            }
+            _ => self.wing_turn(part, self.phased(swarm).then_some(g)),
+        }
     }
 
     /// A part's turn about its hinge (degrees about X): none, a still angle, or one sample
@@ -1075,12 +1149,17 @@ struct ProtoPart {
     /// The part frame's origin in the body frame (a wing: its hinge).
     translate: Vec3,
     flap: Option<bool>,
+    /// A part turned by the `flap` channel (itself or a parent, `Drive::Channel` about
+    /// ±X): the sign of that axis, so the prototype's turn about X is `sign × flap`.
+    channel_flap: Option<f32>,
 }
 
 /// The prototype of a species: its meshes (`Species::meshes`, as glTF draws them) flattened
 /// into the body frame, one Mesh prim per part with a mesh. A part's parents only move it
 /// (the honeybee's and every species' parts hang off an unturned body); a channel-driven
-/// part rests at 0 (USD instances share one prototype, so per-bee part motion is not drawn).
+/// part rests at 0 (USD instances share their prototypes, so per-agent part motion is not
+/// drawn), except that a swarm with flap bins poses the parts the `flap` channel turns at
+/// each bin's angle, one prototype per bin (`flap_column`).
 fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart> {
     let meshes = (sp.meshes)(length);
     assert_eq!(
@@ -1090,9 +1169,28 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
         sp.name
     );
     let mut at: Vec<Vec3> = Vec::new();
+    let mut flap_sign: Vec<Option<f32>> = Vec::new();
     let mut out = Vec::new();
     for (part, pm) in sp.parts.iter().zip(meshes) {
         let parent = part.parent.map_or(Vec3::ZERO, |p| at[p]);
+        // The flap turns its part and every part below it; the parts between a flap and
+        // its mesh (the butterfly's feather) rest at 0, so one turn about X poses the mesh.
+        let channel_flap = match part.drive {
+            Drive::Channel {
+                channel: "flap",
+                axis,
+            } => {
+                assert!(
+                    axis.y == 0.0 && axis.z == 0.0 && axis.x.abs() == 1.0,
+                    "species {}: part {} flaps about ±X",
+                    sp.name,
+                    part.name
+                );
+                Some(axis.x)
+            }
+            _ => part.parent.and_then(|p| flap_sign[p]),
+        };
+        flap_sign.push(channel_flap);
         let translate = match part.drive {
             // The attitude part sits at the agent's centre.
             Drive::Attitude => parent,
@@ -1125,6 +1223,7 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
             membrane_opacity: wings::alpha(display),
             translate,
             flap,
+            channel_flap,
         });
     }
     out
@@ -1140,13 +1239,14 @@ fn bound_radius(parts: &[ProtoPart]) -> f32 {
         for (prim, _) in &part.prims {
             for p in &prim.positions {
                 let p = Vec3::from(*p);
-                let (a, b) = match part.flap {
+                let turns = part.flap.is_some() || part.channel_flap.is_some();
+                let (a, b) = match turns {
                     // Turning about X keeps x and the distance from the hinge line.
-                    Some(_) => {
+                    true => {
                         let r = p.y.hypot(p.z);
                         (Vec3::new(p.x, -r, -r), Vec3::new(p.x, r, r))
                     }
-                    None => (p, p),
+                    false => (p, p),
                 };
                 lo = lo.min(a + part.translate);
                 hi = hi.max(b + part.translate);
@@ -1341,10 +1441,11 @@ impl CacheWriter for UsdaWriter {
                 "USDA writer: swarm \"{}\", bee {}: {} is not finite at frame {}",
                 self.meta.swarms[p.swarm].name,
                 frame.swarms[p.swarm].ids[i],
-                if p.attr == Attr::Extent {
-                    "position".to_owned()
-                } else {
-                    p.attr.name(&self.meta.swarms[p.swarm])
+                match p.attr {
+                    Attr::Extent => "position".to_owned(),
+                    // The bin comes from the flap channel: name the channel.
+                    Attr::ProtoIndices(c) => Attr::Primvar(c).name(&self.meta.swarms[p.swarm]),
+                    a => a.name(&self.meta.swarms[p.swarm]),
                 },
                 frame.frame
             )));
@@ -1635,6 +1736,75 @@ mod tests {
         assert!(t.contains(&format!("    2: {},\n", f32_text(turn(0, 2)))));
         assert_ne!(turn(0, 2), turn(1, 2));
         assert!(t.contains("float inputs:opacity = 0.45"));
+    }
+
+    #[test]
+    fn butterfly_wings_take_the_prototype_of_their_flap_bin_each_frame() {
+        use crate::model::butterfly::BUTTERFLY_CHANNELS;
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = meta(&[3], (1, 4));
+        m.swarms[0].species = &crate::species::BUTTERFLY;
+        m.swarms[0].channels = BUTTERFLY_CHANNELS.to_vec();
+        m.swarms[0].body_length_m = 0.025;
+        let flap = m.swarms[0].channel("flap").unwrap();
+        let path = dir.path().join("test-shot.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
+        // Recorded flap angles per frame for the three butterflies: a stroke, a glide, a
+        // value beyond the bins (clamped to the last).
+        let angles = [
+            [85.0, 10.0, -120.0],
+            [40.2, 10.0, 3.0],
+            [-4.9, 10.0, 95.0],
+            [-64.0, 10.0, 44.9],
+        ];
+        for f in 1..=4 {
+            let mut s = swarm_frame(3, f, 100);
+            s.channels = vec![vec![0.0; 3]; BUTTERFLY_CHANNELS.len()];
+            s.channels[flap] = angles[(f - 1) as usize].to_vec();
+            w.write_frame(&Frame {
+                frame: f,
+                time: 0.0,
+                swarms: std::slice::from_ref(&s),
+            })
+            .unwrap();
+        }
+        crate::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
+        let t = std::fs::read_to_string(&path).unwrap();
+        // Bins of 10° from -90°: 85° → 18 (90°), 10° → 10, -120° → 0, 40.2° → 13, ...
+        assert!(t.contains(
+            "        int[] protoIndices.timeSamples = {\n            1: [18, 10, 0],\n            \
+             2: [13, 10, 9],\n            3: [9, 10, 18],\n            4: [3, 10, 13],\n        }\n"
+        ));
+        assert!(
+            !t.contains("int[] protoIndices = ["),
+            "no static indices besides the samples"
+        );
+        // One prototype per bin; the meshes once, in the first, posed at -90°.
+        assert_eq!(
+            t.matches("def Xform \"butterfly_").count(),
+            wings::FLAP_BINS
+        );
+        assert!(t.contains("</test_shot/swarm0/Prototypes/butterfly_18>]"));
+        assert_eq!(t.matches("def Mesh \"forewing_r\"").count(), 1);
+        assert!(t.contains("def Xform \"butterfly_13\" (\n                prepend references = </test_shot/swarm0/Prototypes/butterfly_0>"));
+        // Left wings turn +flap about X (tip up), right wings −flap; the body never turns.
+        let bin13 = &t[t.find("def Xform \"butterfly_13\"").unwrap()..];
+        let bin13 = &bin13[..bin13.find("def Xform \"butterfly_14\"").unwrap()];
+        for (part, deg) in [
+            ("forewing_l", "40"),
+            ("forewing_r", "-40"),
+            ("hindwing_l", "40"),
+            ("hindwing_r", "-40"),
+        ] {
+            let over = &bin13[bin13.find(&format!("over \"{part}\"")).unwrap()..];
+            assert!(
+                over.contains(&format!("float xformOp:rotateX = {deg}\n")),
+                "{part}"
+            );
+        }
+        assert!(!bin13.contains("over \"body\"") && !bin13.contains("over \"abdomen\""));
+        // The flap channel is still a primvar, as recorded.
+        assert!(t.contains("float[] primvars:flap.timeSamples"));
     }
 
     #[test]
