@@ -80,6 +80,38 @@ def test_usd_validators_pass_and_every_angle_is_a_primvar(baked):
         assert got[0] == pytest.approx(tracks[0][11][name], abs=1e-3), name
 
 
+def test_usd_prototype_per_frame_is_the_flap_bin_and_extent_holds_the_wings(baked):
+    """protoIndices is time-sampled: at every frame each butterfly's index is the bin of its
+    flap primvar, and the bin's prototype poses the wings there; the instancer's extent
+    holds every butterfly with its posed wings (what USD computes from the prototypes)."""
+    pytest.importorskip("pxr")
+    import numpy as np
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(baked["usda"]))
+    inst = next(p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer))
+    pi = UsdGeom.PointInstancer(inst)
+    assert pi.GetProtoIndicesAttr().GetNumTimeSamples() == 31
+    targets = pi.GetPrototypesRel().GetTargets()
+    assert [t.name for t in targets] == [f"butterfly_{k}" for k in range(19)]
+    flap = UsdGeom.PrimvarsAPI(inst).GetPrimvar("flap")
+    seen = set()
+    for t in range(1, 32):
+        indices = list(pi.GetProtoIndicesAttr().Get(t))
+        assert indices == [flap_bin(a) for a in flap.Get(t)], t
+        seen.update(indices)
+        lo, hi = (np.array(v) for v in pi.GetExtentAttr().Get(t))
+        exact_lo, exact_hi = (np.array(v) for v in pi.ComputeExtentAtTime(t, t))
+        assert np.all(lo <= exact_lo + 1e-6) and np.all(hi >= exact_hi - 1e-6), t
+    assert len(seen) >= 4, seen
+    # Bin k turns the right forewing by -(k*10 - 90) degrees about X (tip up), the left by +.
+    for k in (0, 7, 18):
+        proto = stage.GetPrimAtPath(targets[k])
+        right = proto.GetChild("forewing_r").GetAttribute("xformOp:rotateX").Get()
+        left = proto.GetChild("forewing_l").GetAttribute("xformOp:rotateX").Get()
+        assert (left, right) == (k * 10 - 90, 90 - k * 10), k
+
+
 BLENDER = r"""
 import json, math, sys
 import bpy
