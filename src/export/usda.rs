@@ -396,6 +396,8 @@ pub struct UsdaWriter {
     radius: Vec<f32>,
     /// Per swarm: the prototype geometry of its species, one mesh per part.
     protos: Vec<Vec<ProtoPart>>,
+    /// Per swarm: what the flap bins saw, for posing the bins' other parts.
+    bins: Vec<BinStats>,
     wings: WingDisplay,
     /// Per swarm: the index of its first attribute's spill in a chunk.
     first_spill: Vec<usize>,
@@ -428,6 +430,12 @@ impl UsdaWriter {
             .map(|s| proto_parts(s.species, s.body_length_m, wings))
             .collect();
         let radius = protos.iter().map(|p| bound_radius(p)).collect();
+        let bins = meta
+            .swarms
+            .iter()
+            .zip(&protos)
+            .map(|(m, parts)| BinStats::new(m, parts))
+            .collect();
         let mut first_spill = Vec::new();
         let mut spills = 0;
         for s in &meta.swarms {
@@ -454,6 +462,7 @@ impl UsdaWriter {
             scales: Vec::new(),
             radius,
             protos,
+            bins,
             wings,
             first_spill,
             pieces: Vec::new(),
@@ -800,8 +809,8 @@ impl UsdaWriter {
                     let ind = "                    ";
                     match turn {
                         Turn::Sampled(samples) => turn_samples(&mut s, ind, &samples),
-                        Turn::Still(deg) => {
-                            let _ = writeln!(s, "{ind}float xformOp:rotateX = {}", f32_text(deg));
+                        Turn::Still(op, deg) => {
+                            let _ = writeln!(s, "{ind}float xformOp:{op} = {}", f32_text(deg));
                         }
                         Turn::None => {}
                     }
@@ -834,11 +843,22 @@ impl UsdaWriter {
     }
 
     /// A part's turn about its hinge in prototype `g` of a swarm: the bin's flap angle for a
-    /// part turned by the `flap` channel of a binned swarm, else as the wing display says.
+    /// part turned by the `flap` channel of a binned swarm; for another channel-driven part
+    /// of it (the abdomen), the mean of its channel over every (instance, frame) of the bin
+    /// (0 for an empty bin); else as the wing display says.
     fn part_turn(&self, swarm: usize, part: &ProtoPart, g: usize) -> Turn {
-        match part.channel_flap {
-            Some(sign) if flap_column(&self.meta.swarms[swarm]).is_some() => {
-                Turn::Still(sign * wings::flap_bin_deg(g))
+        let binned = flap_column(&self.meta.swarms[swarm]).is_some();
+        match (part.channel_flap, part.channel_turn) {
+            (Some(sign), _) if binned => Turn::Still("rotateX", sign * wings::flap_bin_deg(g)),
+            (_, Some((channel, op, sign))) if binned => {
+                let bins = &self.bins[swarm];
+                let mean = bins
+                    .sums
+                    .iter()
+                    .find(|(c, _)| self.meta.swarms[swarm].channels[*c].name == channel)
+                    .filter(|_| bins.counts[g] > 0)
+                    .map_or(0.0, |(_, sums)| sums[g] / bins.counts[g] as f64);
+                Turn::Still(op, sign * mean as f32)
             }
             _ => self.wing_turn(part, self.phased(swarm).then_some(g)),
         }
@@ -863,7 +883,7 @@ impl UsdaWriter {
             }
             (display, _) => match wings::rest_up_deg(display, 0) {
                 0.0 => Turn::None,
-                up => Turn::Still(wings::turn_deg(up, right)),
+                up => Turn::Still("rotateX", wings::turn_deg(up, right)),
             },
         }
     }
@@ -1152,6 +1172,9 @@ struct ProtoPart {
     /// A part turned by the `flap` channel (itself or a parent, `Drive::Channel` about
     /// ±X): the sign of that axis, so the prototype's turn about X is `sign × flap`.
     channel_flap: Option<f32>,
+    /// A part with a mesh turned by another channel (`Drive::Channel`, no channel-driven
+    /// parent: the butterfly's abdomen): (channel, `rotateX|Y|Z`, sign of the axis).
+    channel_turn: Option<(&'static str, &'static str, f32)>,
 }
 
 /// The prototype of a species: its meshes (`Species::meshes`, as glTF draws them) flattened
@@ -1170,6 +1193,7 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
     );
     let mut at: Vec<Vec3> = Vec::new();
     let mut flap_sign: Vec<Option<f32>> = Vec::new();
+    let mut turned: Vec<bool> = Vec::new();
     let mut out = Vec::new();
     for (part, pm) in sp.parts.iter().zip(meshes) {
         let parent = part.parent.map_or(Vec3::ZERO, |p| at[p]);
@@ -1191,6 +1215,15 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
             _ => part.parent.and_then(|p| flap_sign[p]),
         };
         flap_sign.push(channel_flap);
+        // Only a part hanging from unturned parents: one turn at its own joint poses it.
+        let under_channel = part.parent.is_some_and(|p| turned[p]);
+        turned.push(under_channel || matches!(part.drive, Drive::Channel { .. }));
+        let channel_turn = match part.drive {
+            Drive::Channel { channel, axis } if channel != "flap" && !under_channel => {
+                Some(axis_op(sp, part.name, channel, axis))
+            }
+            _ => None,
+        };
         let translate = match part.drive {
             // The attitude part sits at the agent's centre.
             Drive::Attitude => parent,
@@ -1224,9 +1257,24 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
             translate,
             flap,
             channel_flap,
+            channel_turn,
         });
     }
     out
+}
+
+/// The `rotateX|Y|Z` op and sign of a turn about a signed unit axis of the part frame.
+fn axis_op(
+    sp: &Species,
+    part: &str,
+    channel: &'static str,
+    axis: Vec3,
+) -> (&'static str, &'static str, f32) {
+    let ops = ["rotateX", "rotateY", "rotateZ"];
+    let k = (0..3)
+        .find(|&k| axis[k].abs() == 1.0 && axis.length_squared() == 1.0)
+        .unwrap_or_else(|| panic!("species {}: part {part} turns about a unit axis", sp.name));
+    (channel, ops[k], axis[k])
 }
 
 /// The radius of a sphere at the origin holding the corners of the prototype's bounding
@@ -1239,14 +1287,22 @@ fn bound_radius(parts: &[ProtoPart]) -> f32 {
         for (prim, _) in &part.prims {
             for p in &prim.positions {
                 let p = Vec3::from(*p);
-                let turns = part.flap.is_some() || part.channel_flap.is_some();
-                let (a, b) = match turns {
+                let turns_x = part.flap.is_some() || part.channel_flap.is_some();
+                let (a, b) = match (turns_x, part.channel_turn) {
                     // Turning about X keeps x and the distance from the hinge line.
-                    true => {
+                    (true, _) | (_, Some((_, "rotateX", _))) => {
                         let r = p.y.hypot(p.z);
                         (Vec3::new(p.x, -r, -r), Vec3::new(p.x, r, r))
                     }
-                    false => (p, p),
+                    (_, Some((_, "rotateY", _))) => {
+                        let r = p.x.hypot(p.z);
+                        (Vec3::new(-r, p.y, -r), Vec3::new(r, p.y, r))
+                    }
+                    (_, Some(_)) => {
+                        let r = p.x.hypot(p.y);
+                        (Vec3::new(-r, -r, p.z), Vec3::new(r, r, p.z))
+                    }
+                    (false, None) => (p, p),
                 };
                 lo = lo.min(a + part.translate);
                 hi = hi.max(b + part.translate);
@@ -1256,10 +1312,60 @@ fn bound_radius(parts: &[ProtoPart]) -> f32 {
     lo.abs().max(hi.abs()).length()
 }
 
-/// A wing's turn about its hinge line (part X), degrees.
+/// Per flap bin of a swarm: how many (instance, frame) pairs fell in it, and the sum of
+/// each posed channel (the abdomen's) over them, summed in frame and instance order so the
+/// means are the same with any thread count. The abdomen moves against the flap (paper 004
+/// Table 3: same frequency, opposite phase): within a 10° bin of the aggregation example
+/// its angle spreads ±0.7° (standard deviation), so the bin's mean poses it closely.
+struct BinStats {
+    /// The flap channel's column; `None` for a swarm without flap bins (nothing kept).
+    flap: Option<usize>,
+    counts: Vec<u64>,
+    /// (channel column, sum per bin).
+    sums: Vec<(usize, Vec<f64>)>,
+}
+
+impl BinStats {
+    fn new(m: &SwarmMeta, parts: &[ProtoPart]) -> Self {
+        let flap = flap_column(m);
+        let mut sums: Vec<(usize, Vec<f64>)> = Vec::new();
+        if flap.is_some() {
+            for (channel, _, _) in parts.iter().filter_map(|p| p.channel_turn) {
+                if let Some(c) = m.channel(channel)
+                    && !sums.iter().any(|(k, _)| *k == c)
+                {
+                    sums.push((c, vec![0.0; wings::FLAP_BINS]));
+                }
+            }
+        }
+        BinStats {
+            flap,
+            counts: vec![0; wings::FLAP_BINS],
+            sums,
+        }
+    }
+
+    /// Counts one frame of the swarm (its values already checked finite).
+    fn add(&mut self, s: &SwarmFrame) {
+        let Some(fc) = self.flap else {
+            return;
+        };
+        for (i, &a) in s.channels[fc].iter().enumerate() {
+            let b = wings::flap_bin(a);
+            self.counts[b] += 1;
+            for (c, sums) in &mut self.sums {
+                sums[b] += s.channels[*c][i] as f64;
+            }
+        }
+    }
+}
+
+/// A part's turn about its hinge, degrees: a wing's about its hinge line (part X), a
+/// butterfly's abdomen about its joint's axis.
 enum Turn {
     None,
-    Still(f32),
+    /// A still turn, degrees, by the op `rotateX`, `rotateY` or `rotateZ`.
+    Still(&'static str, f32),
     /// (frame, degrees), one per frame.
     Sampled(Vec<(i32, f32)>),
 }
@@ -1393,9 +1499,13 @@ fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
     }
     match turn {
         Turn::None => {}
-        Turn::Still(deg) => {
-            let _ = writeln!(s, "{ind}float xformOp:rotateX = {}", f32_text(deg));
-            ops.push("\"xformOp:rotateX\"");
+        Turn::Still(op, deg) => {
+            let _ = writeln!(s, "{ind}float xformOp:{op} = {}", f32_text(deg));
+            ops.push(match op {
+                "rotateX" => "\"xformOp:rotateX\"",
+                "rotateY" => "\"xformOp:rotateY\"",
+                _ => "\"xformOp:rotateZ\"",
+            });
         }
         Turn::Sampled(samples) => {
             turn_samples(s, ind, &samples);
@@ -1451,6 +1561,9 @@ impl CacheWriter for UsdaWriter {
             )));
         }
 
+        for (bins, s) in self.bins.iter_mut().zip(frame.swarms) {
+            bins.add(s);
+        }
         let f = frame.frame;
         match self.chunk.take() {
             None => self.chunk = Some(self.new_chunk(f)?),
@@ -1747,6 +1860,7 @@ mod tests {
         m.swarms[0].channels = BUTTERFLY_CHANNELS.to_vec();
         m.swarms[0].body_length_m = 0.025;
         let flap = m.swarms[0].channel("flap").unwrap();
+        let abdomen = m.swarms[0].channel("abdomen").unwrap();
         let path = dir.path().join("test-shot.usda");
         let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
         // Recorded flap angles per frame for the three butterflies: a stroke, a glide, a
@@ -1761,6 +1875,8 @@ mod tests {
             let mut s = swarm_frame(3, f, 100);
             s.channels = vec![vec![0.0; 3]; BUTTERFLY_CHANNELS.len()];
             s.channels[flap] = angles[(f - 1) as usize].to_vec();
+            // The gliding butterfly (always bin 10) moves its abdomen: mean -10°.
+            s.channels[abdomen] = vec![0.0, [-8.0, -10.0, -12.5, -9.5][(f - 1) as usize], 0.0];
             w.write_frame(&Frame {
                 frame: f,
                 time: 0.0,
@@ -1802,7 +1918,22 @@ mod tests {
                 "{part}"
             );
         }
-        assert!(!bin13.contains("over \"body\"") && !bin13.contains("over \"abdomen\""));
+        assert!(!bin13.contains("over \"body\""));
+        // The abdomen (about -Z) at the mean its channel had in the bin: 0 in bin 13, 10° of
+        // rotateZ (tip up by -10°) in bin 10, 0 in an empty bin.
+        let abdomen_in = |k: usize| {
+            let from = t.find(&format!("def Xform \"butterfly_{k}\"")).unwrap();
+            let bin = &t[from..];
+            let over = &bin[bin.find("over \"abdomen\"").unwrap()..];
+            let line = over
+                .lines()
+                .find(|l| l.contains("xformOp:rotateZ"))
+                .unwrap();
+            line.trim().to_owned()
+        };
+        assert_eq!(abdomen_in(13), "float xformOp:rotateZ = 0");
+        assert_eq!(abdomen_in(10), "float xformOp:rotateZ = 10");
+        assert_eq!(abdomen_in(5), "float xformOp:rotateZ = 0");
         // The flap channel is still a primvar, as recorded.
         assert!(t.contains("float[] primvars:flap.timeSamples"));
     }

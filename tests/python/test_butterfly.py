@@ -95,11 +95,15 @@ def test_usd_prototype_per_frame_is_the_flap_bin_and_extent_holds_the_wings(bake
     targets = pi.GetPrototypesRel().GetTargets()
     assert [t.name for t in targets] == [f"butterfly_{k}" for k in range(19)]
     flap = UsdGeom.PrimvarsAPI(inst).GetPrimvar("flap")
+    abdomen = UsdGeom.PrimvarsAPI(inst).GetPrimvar("abdomen")
     seen = set()
+    in_bin = {}
     for t in range(1, 32):
         indices = list(pi.GetProtoIndicesAttr().Get(t))
         assert indices == [flap_bin(a) for a in flap.Get(t)], t
         seen.update(indices)
+        for k, a in zip(indices, abdomen.Get(t)):
+            in_bin.setdefault(k, []).append(a)
         lo, hi = (np.array(v) for v in pi.GetExtentAttr().Get(t))
         exact_lo, exact_hi = (np.array(v) for v in pi.ComputeExtentAtTime(t, t))
         assert np.all(lo <= exact_lo + 1e-6) and np.all(hi >= exact_hi - 1e-6), t
@@ -110,6 +114,12 @@ def test_usd_prototype_per_frame_is_the_flap_bin_and_extent_holds_the_wings(bake
         right = proto.GetChild("forewing_r").GetAttribute("xformOp:rotateX").Get()
         left = proto.GetChild("forewing_l").GetAttribute("xformOp:rotateX").Get()
         assert (left, right) == (k * 10 - 90, 90 - k * 10), k
+    # The abdomen (turned about -Z) in each bin's prototype: the mean of the recorded
+    # abdomen angle over every (butterfly, frame) of the bin.
+    for k in range(19):
+        turn = stage.GetPrimAtPath(targets[k]).GetChild("abdomen").GetAttribute("xformOp:rotateZ").Get()
+        values = in_bin.get(k, [0.0])
+        assert -turn == pytest.approx(sum(values) / len(values), abs=1e-4), k
 
 
 BLENDER = r"""
