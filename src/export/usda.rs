@@ -10,7 +10,10 @@
 //!                                  and one primvars:<channel> per channel the model
 //!                                  records ("vertex": per instance; a honeybee: pitch,
 //!                                  roll, sway)
-//!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee)
+//!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee; a flapping
+//!                                  bee: honeybee_0..7 per phase group; a butterfly:
+//!                                  butterfly_0..18 with the wings at -90°..90° of flap,
+//!                                  chosen per frame by a time-sampled protoIndices)
 //!             /<part>              Mesh per part of the species (body, wing_l, wing_r),
 //!                                  real size in metres, body along +X
 //! ```
@@ -59,6 +62,9 @@ enum Attr {
     Velocities,
     AngularVelocities,
     Extent,
+    /// `protoIndices` of a swarm drawn by flap bins (`flap_column`): per instance, the
+    /// prototype of the bin of its recorded flap angle (channel column `.0`).
+    ProtoIndices(usize),
     /// `primvars:<name>` of the swarm's channel with this index.
     Primvar(usize),
 }
@@ -77,7 +83,29 @@ const FIXED_ATTRS: [Attr; 5] = [
 fn attrs(m: &SwarmMeta) -> impl Iterator<Item = Attr> + '_ {
     FIXED_ATTRS
         .into_iter()
+        .chain(flap_column(m).map(Attr::ProtoIndices))
         .chain((0..m.channels.len()).map(Attr::Primvar))
+}
+
+/// The channel column of a swarm whose wings are drawn by flap bins: its species turns
+/// parts by a recorded `flap` channel (the butterfly) and its model records one. USD
+/// instances share their prototypes, so per-instance wing motion is drawn by choosing,
+/// each frame, the prototype posed nearest the recorded angle (`wings::flap_bin`).
+fn flap_column(m: &SwarmMeta) -> Option<usize> {
+    let turns_by_flap = m.species.parts.iter().any(|p| {
+        matches!(
+            p.drive,
+            Drive::Channel {
+                channel: "flap",
+                ..
+            }
+        )
+    });
+    if turns_by_flap {
+        m.channel("flap")
+    } else {
+        None
+    }
 }
 
 impl Attr {
@@ -90,6 +118,7 @@ impl Attr {
             Attr::Velocities => "vector3f[] velocities".into(),
             Attr::AngularVelocities => "vector3f[] angularVelocities".into(),
             Attr::Extent => "float3[] extent".into(),
+            Attr::ProtoIndices(_) => "int[] protoIndices".into(),
             Attr::Primvar(c) => format!("float[] primvars:{}", m.channels[c].name),
         }
     }
@@ -116,6 +145,7 @@ impl Attr {
             }
             Attr::Orientations => 4 * 11 + 8,
             Attr::Extent => 0,
+            Attr::ProtoIndices(_) => 4,
             Attr::Primvar(_) => 16 + 2,
         }
     }
@@ -212,6 +242,19 @@ impl Piece {
                 bad
             }
             Attr::Primvar(c) => floats(out, &s.channels[c][r.clone()]),
+            Attr::ProtoIndices(c) => {
+                let mut ib = itoa::Buffer::new();
+                let mut bad = None;
+                for (i, &v) in r.clone().zip(&s.channels[c][r.clone()]) {
+                    if !v.is_finite() {
+                        bad = Some(i);
+                        break;
+                    }
+                    sep(out, i);
+                    out.extend_from_slice(ib.format(wings::flap_bin(v)).as_bytes());
+                }
+                bad
+            }
             Attr::Extent => {
                 // A bound of every instance under any rotation: the prototype's bound
                 // radius times the instance's scale around its position. Conservative,
@@ -353,6 +396,8 @@ pub struct UsdaWriter {
     radius: Vec<f32>,
     /// Per swarm: the prototype geometry of its species, one mesh per part.
     protos: Vec<Vec<ProtoPart>>,
+    /// Per swarm: what the flap bins saw, for posing the bins' other parts.
+    bins: Vec<BinStats>,
     wings: WingDisplay,
     /// Per swarm: the index of its first attribute's spill in a chunk.
     first_spill: Vec<usize>,
@@ -385,6 +430,12 @@ impl UsdaWriter {
             .map(|s| proto_parts(s.species, s.body_length_m, wings))
             .collect();
         let radius = protos.iter().map(|p| bound_radius(p)).collect();
+        let bins = meta
+            .swarms
+            .iter()
+            .zip(&protos)
+            .map(|(m, parts)| BinStats::new(m, parts))
+            .collect();
         let mut first_spill = Vec::new();
         let mut spills = 0;
         for s in &meta.swarms {
@@ -411,6 +462,7 @@ impl UsdaWriter {
             scales: Vec::new(),
             radius,
             protos,
+            bins,
             wings,
             first_spill,
             pieces: Vec::new(),
@@ -653,17 +705,21 @@ impl UsdaWriter {
             // its int64 bit pattern, which is what USD would read back from binary.
             t.extend_from_slice(ib.format(*id as i64).as_bytes());
         }
-        t.extend_from_slice(b"]\n        int[] protoIndices = [");
-        let phased = self.phased(swarm);
-        for (i, &id) in self.ids[swarm].iter().enumerate() {
-            if i > 0 {
-                t.extend_from_slice(b", ");
-            }
-            // Flapping: the prototype of the bee's phase group, as in glTF.
-            let index = if phased { wings::group(id) } else { 0 };
-            t.extend_from_slice(ib.format(index).as_bytes());
-        }
         t.extend_from_slice(b"]\n");
+        // Flap bins choose the prototype per frame: protoIndices is time-sampled then.
+        if flap_column(m).is_none() {
+            t.extend_from_slice(b"        int[] protoIndices = [");
+            let phased = self.phased(swarm);
+            for (i, &id) in self.ids[swarm].iter().enumerate() {
+                if i > 0 {
+                    t.extend_from_slice(b", ");
+                }
+                // Flapping: the prototype of the bee's phase group, as in glTF.
+                let index = if phased { wings::group(id) } else { 0 };
+                t.extend_from_slice(ib.format(index).as_bytes());
+            }
+            t.extend_from_slice(b"]\n");
+        }
         // Uniform scales, constant through the shot: formatted like a time sample.
         let mut scales = Piece {
             swarm,
@@ -709,10 +765,13 @@ impl UsdaWriter {
         self.wings.flap_hz() > 0.0 && self.protos[swarm].iter().any(|p| p.flap.is_some())
     }
 
-    /// The prototype names of a swarm: `<species>`, or `<species>_<group>` per phase group.
+    /// The prototype names of a swarm: `<species>`, or `<species>_<group>` per phase group,
+    /// or `<species>_<bin>` per flap bin.
     fn proto_names(&self, swarm: usize) -> Vec<String> {
         let sp = self.meta.swarms[swarm].species.name;
-        if self.phased(swarm) {
+        if flap_column(&self.meta.swarms[swarm]).is_some() {
+            (0..wings::FLAP_BINS).map(|k| format!("{sp}_{k}")).collect()
+        } else if self.phased(swarm) {
             (0..wings::PHASES).map(|g| format!("{sp}_{g}")).collect()
         } else {
             vec![sp.to_owned()]
@@ -725,8 +784,8 @@ impl UsdaWriter {
         let names = self.proto_names(swarm);
         for (g, name) in names.iter().enumerate() {
             if g > 0 {
-                // The other phase groups reference the first one's geometry and override
-                // only their wings' turn samples: the meshes are written once.
+                // The other phase groups (flap bins) reference the first one's geometry and
+                // override only their wings' turn samples (turn): the meshes are written once.
                 let _ = write!(
                     s,
                     "\n            def Xform \"{name}\" (\n                prepend references = </{}/{}/Prototypes/{}>\n            )\n            {{\n",
@@ -734,19 +793,28 @@ impl UsdaWriter {
                 );
                 let mut first = true;
                 for part in &self.protos[swarm] {
-                    if let Turn::Sampled(samples) = self.wing_turn(part, Some(g)) {
-                        if !first {
-                            s.push('\n');
-                        }
-                        first = false;
-                        let _ = write!(
-                            s,
-                            "                over \"{}\"\n                {{\n",
-                            part.name
-                        );
-                        turn_samples(&mut s, "                    ", &samples);
-                        s.push_str("                }\n");
+                    let turn = self.part_turn(swarm, part, g);
+                    if let Turn::None = turn {
+                        continue;
                     }
+                    if !first {
+                        s.push('\n');
+                    }
+                    first = false;
+                    let _ = write!(
+                        s,
+                        "                over \"{}\"\n                {{\n",
+                        part.name
+                    );
+                    let ind = "                    ";
+                    match turn {
+                        Turn::Sampled(samples) => turn_samples(&mut s, ind, &samples),
+                        Turn::Still(op, deg) => {
+                            let _ = writeln!(s, "{ind}float xformOp:{op} = {}", f32_text(deg));
+                        }
+                        Turn::None => {}
+                    }
+                    s.push_str("                }\n");
                 }
                 s.push_str("            }\n");
                 continue;
@@ -756,8 +824,12 @@ impl UsdaWriter {
                 if k > 0 {
                     s.push('\n');
                 }
-                let flap = self.phased(swarm).then_some(g);
-                mesh_text(&mut s, &self.looks_path(), part, self.wing_turn(part, flap));
+                mesh_text(
+                    &mut s,
+                    &self.looks_path(),
+                    part,
+                    self.part_turn(swarm, part, g),
+                );
             }
             s.push_str("            }\n");
         }
@@ -768,6 +840,28 @@ impl UsdaWriter {
     /// `/<root>/Looks`, where every material of the shot is.
     fn looks_path(&self) -> String {
         format!("/{}/Looks", self.root)
+    }
+
+    /// A part's turn about its hinge in prototype `g` of a swarm: the bin's flap angle for a
+    /// part turned by the `flap` channel of a binned swarm; for another channel-driven part
+    /// of it (the abdomen), the mean of its channel over every (instance, frame) of the bin
+    /// (0 for an empty bin); else as the wing display says.
+    fn part_turn(&self, swarm: usize, part: &ProtoPart, g: usize) -> Turn {
+        let binned = flap_column(&self.meta.swarms[swarm]).is_some();
+        match (part.channel_flap, part.channel_turn) {
+            (Some(sign), _) if binned => Turn::Still("rotateX", sign * wings::flap_bin_deg(g)),
+            (_, Some((channel, op, sign))) if binned => {
+                let bins = &self.bins[swarm];
+                let mean = bins
+                    .sums
+                    .iter()
+                    .find(|(c, _)| self.meta.swarms[swarm].channels[*c].name == channel)
+                    .filter(|_| bins.counts[g] > 0)
+                    .map_or(0.0, |(_, sums)| sums[g] / bins.counts[g] as f64);
+                Turn::Still(op, sign * mean as f32)
+            }
+            _ => self.wing_turn(part, self.phased(swarm).then_some(g)),
+        }
     }
 
     /// A part's turn about its hinge (degrees about X): none, a still angle, or one sample
@@ -789,7 +883,7 @@ impl UsdaWriter {
             }
             (display, _) => match wings::rest_up_deg(display, 0) {
                 0.0 => Turn::None,
-                up => Turn::Still(wings::turn_deg(up, right)),
+                up => Turn::Still("rotateX", wings::turn_deg(up, right)),
             },
         }
     }
@@ -1075,12 +1169,20 @@ struct ProtoPart {
     /// The part frame's origin in the body frame (a wing: its hinge).
     translate: Vec3,
     flap: Option<bool>,
+    /// A part turned by the `flap` channel (itself or a parent, `Drive::Channel` about
+    /// ±X): the sign of that axis, so the prototype's turn about X is `sign × flap`.
+    channel_flap: Option<f32>,
+    /// A part with a mesh turned by another channel (`Drive::Channel`, no channel-driven
+    /// parent: the butterfly's abdomen): (channel, `rotateX|Y|Z`, sign of the axis).
+    channel_turn: Option<(&'static str, &'static str, f32)>,
 }
 
 /// The prototype of a species: its meshes (`Species::meshes`, as glTF draws them) flattened
 /// into the body frame, one Mesh prim per part with a mesh. A part's parents only move it
 /// (the honeybee's and every species' parts hang off an unturned body); a channel-driven
-/// part rests at 0 (USD instances share one prototype, so per-bee part motion is not drawn).
+/// part rests at 0 (USD instances share their prototypes, so per-agent part motion is not
+/// drawn), except that a swarm with flap bins poses the parts the `flap` channel turns at
+/// each bin's angle, one prototype per bin (`flap_column`).
 fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart> {
     let meshes = (sp.meshes)(length);
     assert_eq!(
@@ -1090,9 +1192,38 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
         sp.name
     );
     let mut at: Vec<Vec3> = Vec::new();
+    let mut flap_sign: Vec<Option<f32>> = Vec::new();
+    let mut turned: Vec<bool> = Vec::new();
     let mut out = Vec::new();
     for (part, pm) in sp.parts.iter().zip(meshes) {
         let parent = part.parent.map_or(Vec3::ZERO, |p| at[p]);
+        // The flap turns its part and every part below it; the parts between a flap and
+        // its mesh (the butterfly's feather) rest at 0, so one turn about X poses the mesh.
+        let channel_flap = match part.drive {
+            Drive::Channel {
+                channel: "flap",
+                axis,
+            } => {
+                assert!(
+                    axis.y == 0.0 && axis.z == 0.0 && axis.x.abs() == 1.0,
+                    "species {}: part {} flaps about ±X",
+                    sp.name,
+                    part.name
+                );
+                Some(axis.x)
+            }
+            _ => part.parent.and_then(|p| flap_sign[p]),
+        };
+        flap_sign.push(channel_flap);
+        // Only a part hanging from unturned parents: one turn at its own joint poses it.
+        let under_channel = part.parent.is_some_and(|p| turned[p]);
+        turned.push(under_channel || matches!(part.drive, Drive::Channel { .. }));
+        let channel_turn = match part.drive {
+            Drive::Channel { channel, axis } if channel != "flap" && !under_channel => {
+                Some(axis_op(sp, part.name, channel, axis))
+            }
+            _ => None,
+        };
         let translate = match part.drive {
             // The attitude part sits at the agent's centre.
             Drive::Attitude => parent,
@@ -1125,9 +1256,25 @@ fn proto_parts(sp: &Species, length: f32, display: WingDisplay) -> Vec<ProtoPart
             membrane_opacity: wings::alpha(display),
             translate,
             flap,
+            channel_flap,
+            channel_turn,
         });
     }
     out
+}
+
+/// The `rotateX|Y|Z` op and sign of a turn about a signed unit axis of the part frame.
+fn axis_op(
+    sp: &Species,
+    part: &str,
+    channel: &'static str,
+    axis: Vec3,
+) -> (&'static str, &'static str, f32) {
+    let ops = ["rotateX", "rotateY", "rotateZ"];
+    let k = (0..3)
+        .find(|&k| axis[k].abs() == 1.0 && axis.length_squared() == 1.0)
+        .unwrap_or_else(|| panic!("species {}: part {part} turns about a unit axis", sp.name));
+    (channel, ops[k], axis[k])
 }
 
 /// The radius of a sphere at the origin holding the corners of the prototype's bounding
@@ -1140,13 +1287,22 @@ fn bound_radius(parts: &[ProtoPart]) -> f32 {
         for (prim, _) in &part.prims {
             for p in &prim.positions {
                 let p = Vec3::from(*p);
-                let (a, b) = match part.flap {
+                let turns_x = part.flap.is_some() || part.channel_flap.is_some();
+                let (a, b) = match (turns_x, part.channel_turn) {
                     // Turning about X keeps x and the distance from the hinge line.
-                    Some(_) => {
+                    (true, _) | (_, Some((_, "rotateX", _))) => {
                         let r = p.y.hypot(p.z);
                         (Vec3::new(p.x, -r, -r), Vec3::new(p.x, r, r))
                     }
-                    None => (p, p),
+                    (_, Some((_, "rotateY", _))) => {
+                        let r = p.x.hypot(p.z);
+                        (Vec3::new(-r, p.y, -r), Vec3::new(r, p.y, r))
+                    }
+                    (_, Some(_)) => {
+                        let r = p.x.hypot(p.y);
+                        (Vec3::new(-r, -r, p.z), Vec3::new(r, r, p.z))
+                    }
+                    (false, None) => (p, p),
                 };
                 lo = lo.min(a + part.translate);
                 hi = hi.max(b + part.translate);
@@ -1156,10 +1312,60 @@ fn bound_radius(parts: &[ProtoPart]) -> f32 {
     lo.abs().max(hi.abs()).length()
 }
 
-/// A wing's turn about its hinge line (part X), degrees.
+/// Per flap bin of a swarm: how many (instance, frame) pairs fell in it, and the sum of
+/// each posed channel (the abdomen's) over them, summed in frame and instance order so the
+/// means are the same with any thread count. The abdomen moves against the flap (paper 004
+/// Table 3: same frequency, opposite phase): within a 10° bin of the aggregation example
+/// its angle spreads ±0.7° (standard deviation), so the bin's mean poses it closely.
+struct BinStats {
+    /// The flap channel's column; `None` for a swarm without flap bins (nothing kept).
+    flap: Option<usize>,
+    counts: Vec<u64>,
+    /// (channel column, sum per bin).
+    sums: Vec<(usize, Vec<f64>)>,
+}
+
+impl BinStats {
+    fn new(m: &SwarmMeta, parts: &[ProtoPart]) -> Self {
+        let flap = flap_column(m);
+        let mut sums: Vec<(usize, Vec<f64>)> = Vec::new();
+        if flap.is_some() {
+            for (channel, _, _) in parts.iter().filter_map(|p| p.channel_turn) {
+                if let Some(c) = m.channel(channel)
+                    && !sums.iter().any(|(k, _)| *k == c)
+                {
+                    sums.push((c, vec![0.0; wings::FLAP_BINS]));
+                }
+            }
+        }
+        BinStats {
+            flap,
+            counts: vec![0; wings::FLAP_BINS],
+            sums,
+        }
+    }
+
+    /// Counts one frame of the swarm (its values already checked finite).
+    fn add(&mut self, s: &SwarmFrame) {
+        let Some(fc) = self.flap else {
+            return;
+        };
+        for (i, &a) in s.channels[fc].iter().enumerate() {
+            let b = wings::flap_bin(a);
+            self.counts[b] += 1;
+            for (c, sums) in &mut self.sums {
+                sums[b] += s.channels[*c][i] as f64;
+            }
+        }
+    }
+}
+
+/// A part's turn about its hinge, degrees: a wing's about its hinge line (part X), a
+/// butterfly's abdomen about its joint's axis.
 enum Turn {
     None,
-    Still(f32),
+    /// A still turn, degrees, by the op `rotateX`, `rotateY` or `rotateZ`.
+    Still(&'static str, f32),
     /// (frame, degrees), one per frame.
     Sampled(Vec<(i32, f32)>),
 }
@@ -1293,9 +1499,13 @@ fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
     }
     match turn {
         Turn::None => {}
-        Turn::Still(deg) => {
-            let _ = writeln!(s, "{ind}float xformOp:rotateX = {}", f32_text(deg));
-            ops.push("\"xformOp:rotateX\"");
+        Turn::Still(op, deg) => {
+            let _ = writeln!(s, "{ind}float xformOp:{op} = {}", f32_text(deg));
+            ops.push(match op {
+                "rotateX" => "\"xformOp:rotateX\"",
+                "rotateY" => "\"xformOp:rotateY\"",
+                _ => "\"xformOp:rotateZ\"",
+            });
         }
         Turn::Sampled(samples) => {
             turn_samples(s, ind, &samples);
@@ -1341,15 +1551,19 @@ impl CacheWriter for UsdaWriter {
                 "USDA writer: swarm \"{}\", bee {}: {} is not finite at frame {}",
                 self.meta.swarms[p.swarm].name,
                 frame.swarms[p.swarm].ids[i],
-                if p.attr == Attr::Extent {
-                    "position".to_owned()
-                } else {
-                    p.attr.name(&self.meta.swarms[p.swarm])
+                match p.attr {
+                    Attr::Extent => "position".to_owned(),
+                    // The bin comes from the flap channel: name the channel.
+                    Attr::ProtoIndices(c) => Attr::Primvar(c).name(&self.meta.swarms[p.swarm]),
+                    a => a.name(&self.meta.swarms[p.swarm]),
                 },
                 frame.frame
             )));
         }
 
+        for (bins, s) in self.bins.iter_mut().zip(frame.swarms) {
+            bins.add(s);
+        }
         let f = frame.frame;
         match self.chunk.take() {
             None => self.chunk = Some(self.new_chunk(f)?),
@@ -1636,6 +1850,93 @@ mod tests {
         assert!(t.contains(&format!("    2: {},\n", f32_text(turn(0, 2)))));
         assert_ne!(turn(0, 2), turn(1, 2));
         assert!(t.contains("float inputs:opacity = 0.45"));
+    }
+
+    #[test]
+    fn butterfly_wings_take_the_prototype_of_their_flap_bin_each_frame() {
+        use crate::model::butterfly::BUTTERFLY_CHANNELS;
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = meta(&[3], (1, 4));
+        m.swarms[0].species = &crate::species::BUTTERFLY;
+        m.swarms[0].channels = BUTTERFLY_CHANNELS.to_vec();
+        m.swarms[0].body_length_m = 0.025;
+        let flap = m.swarms[0].channel("flap").unwrap();
+        let abdomen = m.swarms[0].channel("abdomen").unwrap();
+        let path = dir.path().join("test-shot.usda");
+        let mut w = UsdaWriter::create(&path, &m, 0, WingDisplay::Blur).unwrap();
+        // Recorded flap angles per frame for the three butterflies: a stroke, a glide, a
+        // value beyond the bins (clamped to the last).
+        let angles = [
+            [85.0, 10.0, -120.0],
+            [40.2, 10.0, 3.0],
+            [-4.9, 10.0, 95.0],
+            [-64.0, 10.0, 44.9],
+        ];
+        for f in 1..=4 {
+            let mut s = swarm_frame(3, f, 100);
+            s.channels = vec![vec![0.0; 3]; BUTTERFLY_CHANNELS.len()];
+            s.channels[flap] = angles[(f - 1) as usize].to_vec();
+            // The gliding butterfly (always bin 10) moves its abdomen: mean -10°.
+            s.channels[abdomen] = vec![0.0, [-8.0, -10.0, -12.5, -9.5][(f - 1) as usize], 0.0];
+            w.write_frame(&Frame {
+                frame: f,
+                time: 0.0,
+                swarms: std::slice::from_ref(&s),
+            })
+            .unwrap();
+        }
+        crate::atomic::commit_all(Box::new(w).finish().unwrap()).unwrap();
+        let t = std::fs::read_to_string(&path).unwrap();
+        // Bins of 10° from -90°: 85° → 18 (90°), 10° → 10, -120° → 0, 40.2° → 13, ...
+        assert!(t.contains(
+            "        int[] protoIndices.timeSamples = {\n            1: [18, 10, 0],\n            \
+             2: [13, 10, 9],\n            3: [9, 10, 18],\n            4: [3, 10, 13],\n        }\n"
+        ));
+        assert!(
+            !t.contains("int[] protoIndices = ["),
+            "no static indices besides the samples"
+        );
+        // One prototype per bin; the meshes once, in the first, posed at -90°.
+        assert_eq!(
+            t.matches("def Xform \"butterfly_").count(),
+            wings::FLAP_BINS
+        );
+        assert!(t.contains("</test_shot/swarm0/Prototypes/butterfly_18>]"));
+        assert_eq!(t.matches("def Mesh \"forewing_r\"").count(), 1);
+        assert!(t.contains("def Xform \"butterfly_13\" (\n                prepend references = </test_shot/swarm0/Prototypes/butterfly_0>"));
+        // Left wings turn +flap about X (tip up), right wings −flap; the body never turns.
+        let bin13 = &t[t.find("def Xform \"butterfly_13\"").unwrap()..];
+        let bin13 = &bin13[..bin13.find("def Xform \"butterfly_14\"").unwrap()];
+        for (part, deg) in [
+            ("forewing_l", "40"),
+            ("forewing_r", "-40"),
+            ("hindwing_l", "40"),
+            ("hindwing_r", "-40"),
+        ] {
+            let over = &bin13[bin13.find(&format!("over \"{part}\"")).unwrap()..];
+            assert!(
+                over.contains(&format!("float xformOp:rotateX = {deg}\n")),
+                "{part}"
+            );
+        }
+        assert!(!bin13.contains("over \"body\""));
+        // The abdomen (about -Z) at the mean its channel had in the bin: 0 in bin 13, 10° of
+        // rotateZ (tip up by -10°) in bin 10, 0 in an empty bin.
+        let abdomen_in = |k: usize| {
+            let from = t.find(&format!("def Xform \"butterfly_{k}\"")).unwrap();
+            let bin = &t[from..];
+            let over = &bin[bin.find("over \"abdomen\"").unwrap()..];
+            let line = over
+                .lines()
+                .find(|l| l.contains("xformOp:rotateZ"))
+                .unwrap();
+            line.trim().to_owned()
+        };
+        assert_eq!(abdomen_in(13), "float xformOp:rotateZ = 0");
+        assert_eq!(abdomen_in(10), "float xformOp:rotateZ = 10");
+        assert_eq!(abdomen_in(5), "float xformOp:rotateZ = 0");
+        // The flap channel is still a primvar, as recorded.
+        assert!(t.contains("float[] primvars:flap.timeSamples"));
     }
 
     #[test]

@@ -33,6 +33,30 @@ pub const ALPHA_BLUR: f32 = 0.16;
 /// Ghosted copies in the blur fan, spread evenly over the stroke.
 pub const BLUR_COPIES: usize = 5;
 
+/// Butterflies (a species whose parts turn by a recorded `flap` channel, `Drive::Channel`)
+/// are drawn in USD by prototypes with the wings posed at [`FLAP_BINS`] flap angles,
+/// [`FLAP_BIN_DEG`] apart from [`FLAP_BIN_LO_DEG`] (−90° … +90°), and each instance takes,
+/// frame by frame, the prototype of the bin nearest its recorded angle (`protoIndices`
+/// time-sampled). 10° bins: the drawn wing is within 5° of the recorded one over a stroke
+/// of about 150°, and 19 prototypes cost one reference each, the meshes written once.
+pub const FLAP_BINS: usize = 19;
+/// Width of a flap bin, degrees.
+pub const FLAP_BIN_DEG: f32 = 10.0;
+/// Flap angle of bin 0, degrees (tips down).
+pub const FLAP_BIN_LO_DEG: f32 = -90.0;
+
+/// The flap angle, degrees, a bin's prototype poses its wings at.
+pub fn flap_bin_deg(bin: usize) -> f32 {
+    FLAP_BIN_LO_DEG + FLAP_BIN_DEG * bin as f32
+}
+
+/// The bin nearest a recorded flap angle (degrees, finite); angles beyond ±90° take the
+/// last bin on their side.
+pub fn flap_bin(flap_deg: f32) -> usize {
+    let k = ((flap_deg - FLAP_BIN_LO_DEG) / FLAP_BIN_DEG).round();
+    k.clamp(0.0, (FLAP_BINS - 1) as f32) as usize
+}
+
 /// The phase group of an agent.
 pub fn group(id: u64) -> usize {
     (id % PHASES) as usize
@@ -101,6 +125,20 @@ mod tests {
         assert!((lo - (MID_DEG - AMPLITUDE_DEG)).abs() < 1e-3);
         assert!((angle(hz, 0.0, 2) - (MID_DEG + AMPLITUDE_DEG)).abs() < 1e-3);
         assert_ne!(angle(hz, 0.1, 1), angle(hz, 0.1, 2));
+    }
+
+    #[test]
+    fn flap_bins_are_nearest_and_clamped() {
+        assert_eq!(flap_bin(-90.0), 0);
+        assert_eq!(flap_bin(-200.0), 0);
+        assert_eq!(flap_bin(200.0), FLAP_BINS - 1);
+        assert_eq!(flap_bin_deg(FLAP_BINS - 1), 90.0);
+        for a in [-84.9f32, -3.0, 0.0, 4.9, 10.0, 37.6, 85.0] {
+            assert!(
+                (flap_bin_deg(flap_bin(a)) - a).abs() <= 0.5 * FLAP_BIN_DEG + 1e-4,
+                "{a}"
+            );
+        }
     }
 
     #[test]

@@ -118,7 +118,8 @@ pub struct Part {
     pub drive: Drive,
 }
 
-/// What moves a part (glTF node animation; USD instances are rigid).
+/// What moves a part (glTF node animation; USD instances share prototypes, so only a
+/// wing flap, and a `flap` channel by posed prototypes, moves there: `export::usda`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Drive {
     /// The simulated attitude (the body part): rotation heading⁻¹·orientation,
