@@ -276,32 +276,6 @@ position = [0, 1, 0]
     )
 }
 
-/// Approach–retreat cycles of a distance series: local minima at least `depth` below the
-/// maxima on both sides; returns the distances at those minima.
-fn turnarounds(d: &[f32], depth: f32) -> Vec<f32> {
-    let mut out = Vec::new();
-    let mut hi = d[0];
-    let mut lo = f32::INFINITY;
-    let mut descending = true;
-    for &x in d {
-        if descending {
-            lo = lo.min(x);
-            if hi - lo >= depth && x - lo >= depth {
-                out.push(lo);
-                descending = false;
-                hi = x;
-            }
-        } else {
-            hi = hi.max(x);
-            if hi - x >= depth {
-                descending = true;
-                lo = x;
-            }
-        }
-    }
-    out
-}
-
 /// Median cycles per bee and the share of turnarounds within `reach` of the nest.
 fn zigzag(params: &str) -> (f32, f32) {
     let (f, nest, reach) = nest_scene(params);
@@ -310,7 +284,7 @@ fn zigzag(params: &str) -> (f32, f32) {
     let (mut inside, mut total) = (0, 0);
     for b in 0..n {
         let d: Vec<f32> = f.iter().map(|fr| fr[b].pos.distance(nest)).collect();
-        let t = turnarounds(&d, 0.1);
+        let t = common::turnarounds(&d, 0.1);
         cycles.push(t.len() as f32);
         inside += t.iter().filter(|&&x| x < reach).count();
         total += t.len();

@@ -7,6 +7,8 @@
 //! obstacle among the bees covers the mesh queries' per-thread memo and search bounds,
 //! which must not change an answer.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -77,39 +79,7 @@ position = [0.2, 1, 0.5]
 
 /// A UV sphere of radius 0.15 m, 1,920 triangles, as OBJ text.
 fn ball_obj() -> String {
-    let (rings, segs) = (20u32, 48u32);
-    let mut s = String::from("v 0 0.15 0\n");
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = std::f64::consts::TAU * j as f64 / segs as f64;
-            s += &format!(
-                "v {} {} {}\n",
-                0.15 * th.sin() * ph.cos(),
-                0.15 * th.cos(),
-                0.15 * th.sin() * ph.sin()
-            );
-        }
-    }
-    s += "v 0 -0.15 0\n";
-    let bottom = 2 + (rings - 1) * segs;
-    let at = |i: u32, j: u32| 2 + (i - 1) * segs + j % segs;
-    for j in 0..segs {
-        s += &format!("f 1 {} {}\n", at(1, j + 1), at(1, j));
-        s += &format!("f {bottom} {} {}\n", at(rings - 1, j), at(rings - 1, j + 1));
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            s += &format!(
-                "f {} {} {} {}\n",
-                at(i, j),
-                at(i, j + 1),
-                at(i + 1, j + 1),
-                at(i + 1, j)
-            );
-        }
-    }
-    s
+    common::star_shaped_obj(20, 48, |_, _| 0.15)
 }
 
 fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {

@@ -250,27 +250,7 @@ params = { containment = 20 }
 
 /// Local minima of a distance series that are at least `depth` below the maxima around them.
 fn approach_cycles(d: &[f32], depth: f32) -> usize {
-    let mut count = 0;
-    let mut hi = d[0];
-    let mut lo = f32::INFINITY;
-    let mut descending = true;
-    for &x in d {
-        if descending {
-            lo = lo.min(x);
-            if hi - lo >= depth && x - lo >= depth {
-                count += 1;
-                descending = false;
-                hi = x;
-            }
-        } else {
-            hi = hi.max(x);
-            if hi - x >= depth {
-                descending = true;
-                lo = x;
-            }
-        }
-    }
-    count
+    common::turnarounds(d, depth).len()
 }
 
 #[test]

@@ -170,40 +170,9 @@ fn blob_obj(rng: &mut Rng, rings: u32, segments: u32) -> String {
         rng.range(1.0, 4.0),
         rng.range(0.0, 6.3),
     );
-    let radius = |th: f32, ph: f32| r0 * (1.0 + a * (b * th).sin() * (2.0 * ph + c).cos());
-    let mut s = format!("v 0 {} 0\n", radius(0.0, 0.0));
-    for i in 1..rings {
-        let th = std::f32::consts::PI * i as f32 / rings as f32;
-        for j in 0..segments {
-            let ph = std::f32::consts::TAU * j as f32 / segments as f32;
-            let r = radius(th, ph);
-            s += &format!(
-                "v {} {} {}\n",
-                r * th.sin() * ph.cos(),
-                r * th.cos(),
-                r * th.sin() * ph.sin()
-            );
-        }
-    }
-    s += &format!("v 0 {} 0\n", -radius(std::f32::consts::PI, 0.0));
-    let bottom = 2 + (rings - 1) * segments;
-    let at = |i: u32, j: u32| 2 + (i - 1) * segments + j % segments;
-    for j in 0..segments {
-        s += &format!("f 1 {} {}\n", at(1, j + 1), at(1, j));
-        s += &format!("f {bottom} {} {}\n", at(rings - 1, j), at(rings - 1, j + 1));
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            s += &format!(
-                "f {} {} {} {}\n",
-                at(i, j),
-                at(i, j + 1),
-                at(i + 1, j + 1),
-                at(i + 1, j)
-            );
-        }
-    }
-    s
+    common::star_shaped_obj(rings, segments, |th, ph| {
+        r0 * (1.0 + a * (b * th).sin() * (2.0 * ph + c).cos())
+    })
 }
 
 /// A random open sheet as OBJ text: a wavy square, 1 m a side, avoided as a shell.

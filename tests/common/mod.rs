@@ -107,3 +107,67 @@ pub fn bake_example(example: &str) -> BTreeMap<String, Frames> {
         .map(|(s, (p, v))| (s.name.clone(), Frames::new(shot.fps, p, v).unwrap()))
         .collect()
 }
+
+/// A closed star-shaped mesh as OBJ text: a UV sphere of `rings` × `segments` cells whose
+/// radius is `radius(θ, φ)` (polar angle from +Y, azimuth), so never self-intersecting.
+pub fn star_shaped_obj(rings: u32, segments: u32, radius: impl Fn(f32, f32) -> f32) -> String {
+    let mut s = format!("v 0 {} 0\n", radius(0.0, 0.0));
+    for i in 1..rings {
+        let th = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..segments {
+            let ph = std::f32::consts::TAU * j as f32 / segments as f32;
+            let r = radius(th, ph);
+            s += &format!(
+                "v {} {} {}\n",
+                r * th.sin() * ph.cos(),
+                r * th.cos(),
+                r * th.sin() * ph.sin()
+            );
+        }
+    }
+    s += &format!("v 0 {} 0\n", -radius(std::f32::consts::PI, 0.0));
+    let bottom = 2 + (rings - 1) * segments;
+    let at = |i: u32, j: u32| 2 + (i - 1) * segments + j % segments;
+    for j in 0..segments {
+        s += &format!("f 1 {} {}\n", at(1, j + 1), at(1, j));
+        s += &format!("f {bottom} {} {}\n", at(rings - 1, j), at(rings - 1, j + 1));
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            s += &format!(
+                "f {} {} {} {}\n",
+                at(i, j),
+                at(i, j + 1),
+                at(i + 1, j + 1),
+                at(i + 1, j)
+            );
+        }
+    }
+    s
+}
+
+/// Approach–retreat cycles of a distance series: local minima at least `depth` below the
+/// maxima on both sides; returns the distances at those minima.
+pub fn turnarounds(d: &[f32], depth: f32) -> Vec<f32> {
+    let mut out = Vec::new();
+    let mut hi = d[0];
+    let mut lo = f32::INFINITY;
+    let mut descending = true;
+    for &x in d {
+        if descending {
+            lo = lo.min(x);
+            if hi - lo >= depth && x - lo >= depth {
+                out.push(lo);
+                descending = false;
+                hi = x;
+            }
+        } else {
+            hi = hi.max(x);
+            if hi - x >= depth {
+                descending = true;
+                lo = x;
+            }
+        }
+    }
+    out
+}
