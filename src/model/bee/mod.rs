@@ -504,7 +504,7 @@ impl BeeModel {
 
 /// Elevation of `v` above the horizontal, degrees.
 fn elevation_deg(v: Vec3) -> f32 {
-    v.y.atan2(Vec3::new(v.x, 0.0, v.z).length()).to_degrees()
+    math::atan2(v.y, Vec3::new(v.x, 0.0, v.z).length()).to_degrees()
 }
 
 /// Body orientation from heading (radians) and pitch and roll (degrees).
