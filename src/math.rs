@@ -108,6 +108,30 @@ pub fn body_orientation(yaw: f32, pitch: f32, roll: f32) -> Quat {
     Quat::from_rotation_y(yaw) * Quat::from_rotation_z(pitch) * Quat::from_rotation_x(roll)
 }
 
+/// `floor` as an integer without a library call (x86-64 without SSE4.1 has no floor
+/// instruction); saturates far out of range.
+#[inline(always)]
+fn floor_i32(v: f32) -> i32 {
+    let t = v as i32;
+    if (t as f32) > v { t - 1 } else { t }
+}
+
+/// `a` wrapped into [0, 2π), radians, for angles within a few turns (headings): a floor
+/// instead of the C library's fmod.
+#[inline]
+pub fn wrap_tau(a: f32) -> f32 {
+    use std::f32::consts::TAU;
+    let w = a - TAU * floor_i32(a * (1.0 / TAU)) as f32;
+    // Rounding can land a hair outside the range.
+    if w >= TAU {
+        w - TAU
+    } else if w < 0.0 {
+        w + TAU
+    } else {
+        w
+    }
+}
+
 /// Angular velocity (rad/s, world frame) taking `from` to `to` in `dt` seconds.
 pub fn angular_velocity(from: Quat, to: Quat, dt: f32) -> Vec3 {
     let mut d = to * from.inverse();
@@ -131,6 +155,21 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn wrap_tau_stays_in_range() {
+        use std::f32::consts::TAU;
+        for i in -10_000..10_000 {
+            let a = i as f32 * 0.00371;
+            let w = super::wrap_tau(a);
+            assert!((0.0..TAU).contains(&w), "{a} -> {w}");
+            assert!(
+                (w - a.rem_euclid(TAU)).abs() < 1e-5 || (w - a.rem_euclid(TAU)).abs() > TAU - 1e-5,
+                "{a}"
+            );
+        }
+        assert!(super::wrap_tau(-1e-6) > TAU - 1e-5);
+        assert_eq!(super::wrap_tau(TAU), 0.0);
+    }
     #[test]
     fn atan2_is_within_5e_7_rad_of_the_exact_value_and_keeps_the_quadrants() {
         let mut worst = 0.0f64;

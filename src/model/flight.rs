@@ -19,7 +19,7 @@ const HOVER_TURN_SPEED: f32 = 0.05;
 
 /// An angle difference wrapped into [−π, π), radians.
 fn wrap_angle(a: f32) -> f32 {
-    (a + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI
+    math::wrap_tau(a + std::f32::consts::PI) - std::f32::consts::PI
 }
 
 /// Per-step blend factor 1 − exp(−dt/τ) of a first-order lag with time constant τ.
@@ -228,10 +228,10 @@ pub fn follow_heading(yaw: f32, vel: Vec3, steer: Avoidance, blend: f32, dt: f32
     if stopped && steer.away.length_squared() > 1e-8 {
         let dy = wrap_angle(math::yaw_of(steer.away) - yaw);
         let turn = dy.clamp(-HOVER_TURN_RATE * dt, HOVER_TURN_RATE * dt);
-        (yaw + turn).rem_euclid(std::f32::consts::TAU)
+        math::wrap_tau(yaw + turn)
     } else if horizontal.length() > 0.02 {
         let dy = wrap_angle(math::yaw_of(horizontal) - yaw);
-        (yaw + dy * blend).rem_euclid(std::f32::consts::TAU)
+        math::wrap_tau(yaw + dy * blend)
     } else {
         yaw
     }
