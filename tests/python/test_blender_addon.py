@@ -445,6 +445,7 @@ def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, bees
     world space, Y-up, with their modifiers; the file passes the Khronos validator and the
     bake keeps every bee out of them."""
     from mathutils.bvhtree import BVHTree
+    from mathutils.kdtree import KDTree
     bpy.ops.mesh.primitive_monkey_add(size=0.8, location=(0.0, 0.0, 1.0),
                                       rotation=(0.0, 0.0, math.radians(30)))
     monkey = bpy.context.active_object
@@ -520,6 +521,20 @@ def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, bees
     assert min(gaps["cone"]) > 0.0, min(gaps["cone"])
     # The swarm met the monkey on its way to the nest.
     assert sum(g < 0.1 for g in gaps["Suzanne"]) > 20, sorted(gaps["Suzanne"])[:5]
+
+    # Blender's own glTF importer reads the file back where the objects are.
+    bpy.ops.import_scene.gltf(filepath=str(folder / "bltest.obstacles.glb"))
+    for obj in (monkey, cone):
+        back = bpy.data.objects[obj.name + ".001"]
+        ev = obj.evaluated_get(depsgraph)
+        assert len(back.data.vertices) == len(ev.data.vertices)
+        tree = KDTree(len(ev.data.vertices))
+        for k, v in enumerate(ev.data.vertices):
+            tree.insert(obj.matrix_world @ v.co, k)
+        tree.balance()
+        hits = [tree.find(back.matrix_world @ v.co) for v in back.data.vertices]
+        assert max(d for _, _, d in hits) < 1e-5
+        assert len({k for _, k, _ in hits}) == len(hits)  # one to one
 
 
 def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
