@@ -15,7 +15,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from . import toml_writer
+from . import glb_writer, toml_writer
 
 C = Matrix(((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0)))
 C_INV = C.transposed()
@@ -23,8 +23,8 @@ C_INV = C.transposed()
 OBSTACLE_TYPES = ("sphere", "box", "cylinder", "capsule", "plane", "mesh")
 # Objects that can be evaluated to a mesh, and so exported as mesh obstacles.
 MESH_LIKE = {"MESH", "CURVE", "SURFACE", "META", "FONT"}
-# Key of the shot dict holding the mesh files to write beside the shot ({name: OBJ text});
-# not part of the TOML (see shot_toml, write_mesh_files).
+# Key of the shot dict holding the mesh files to write beside the shot ({name: bytes}):
+# one .glb of every mesh obstacle; not part of the TOML (see shot_toml, write_mesh_files).
 MESH_FILES = "_mesh_files"
 TARGET_TYPES = ("nest", "flower", "attractor")
 TYPE_PROP = "beeswarm_type"
@@ -183,10 +183,11 @@ def _decompose(obj):
     return quat.to_matrix(), scale
 
 
-def mesh_obstacle(obj, depsgraph, file_name):
-    """(obstacle entry, OBJ text) of any object that evaluates to a mesh: its evaluated
-    geometry (modifiers applied) in world space, Y-up, metres, triangulated. A closed mesh
-    (every edge shared by two triangles) is a solid; any other is avoided as a shell."""
+def mesh_obstacle(obj, depsgraph, file_name, node):
+    """(obstacle entry, (node, positions, triangles)) of any object that evaluates to a
+    mesh: its evaluated geometry (modifiers applied) in world space, Y-up, metres,
+    triangulated, for the node `node` of the shot's obstacle .glb `file_name`. A closed
+    mesh (every edge shared by two triangles) is a solid; any other is avoided as a shell."""
     ev = obj.evaluated_get(depsgraph)
     try:
         me = ev.to_mesh()
@@ -209,18 +210,17 @@ def mesh_obstacle(obj, depsgraph, file_name):
         ev.to_mesh_clear()
     mw = np.array(obj.matrix_world, dtype=np.float64)
     world = co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
-    shot = np.stack([world[:, 0], world[:, 2], -world[:, 1]], axis=1)
+    shot = np.stack([world[:, 0], world[:, 2], -world[:, 1]], axis=1).astype(np.float32)
+    if not np.all(np.isfinite(shot)):
+        raise UnsupportedShape(f"'{obj.name}' has vertices that are not finite numbers")
     tri = tri.reshape(t, 3)
     edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
     _, uses = np.unique(edges, axis=0, return_counts=True)
     closed = bool(np.all(uses == 2))
-    lines = [f"# {obj.name}: world space, Y-up, metres (written by the beeswarm add-on)"]
-    lines += ["v %.7g %.7g %.7g" % tuple(v) for v in shot]
-    lines += ["f %d %d %d" % tuple(f) for f in (tri + 1)]
-    entry = {"type": "mesh", "name": obj.name, "file": file_name}
+    entry = {"type": "mesh", "name": obj.name, "file": file_name, "node": node}
     if not closed:
         entry["mode"] = "shell"
-    return entry, "\n".join(lines) + "\n"
+    return entry, (node, shot, tri)
 
 
 def obstacle_entry(obj, kind, warnings):
@@ -416,7 +416,10 @@ def build_shot(scene, settings, name=None):
     if dupes:
         raise ShotBuildError(f"Two swarms are named {dupes[0]}: give each its own name")
 
-    obstacles, problems, mesh_files = [], [], {}
+    obstacles, problems, meshes = [], [], []
+    # Every mesh obstacle is one node of this file, beside the shot (not `<shot>.glb`,
+    # which is the glTF cache's name).
+    mesh_file = f"{shot_name}.obstacles.glb"
     depsgraph = bpy.context.evaluated_depsgraph_get()
     for obj in _objects(settings.obstacles):
         if obj.type not in MESH_LIKE | {"EMPTY"}:
@@ -428,14 +431,14 @@ def build_shot(scene, settings, name=None):
             continue
         try:
             if kind is None or kind == "mesh":
-                # Any other shape: its mesh, written beside the shot.
-                stem = f"{shot_name}.{safe_name(obj.name)}"
-                file_name, k = f"{stem}.obj", 1
-                while file_name in mesh_files:  # two names that read alike as files
+                # Any other shape: its mesh, a node of the shot's obstacle .glb. Object
+                # names are unique but for linked libraries' objects: keep nodes apart.
+                node, k = obj.name, 1
+                while any(m[0] == node for m in meshes):
                     k += 1
-                    file_name = f"{stem}_{k}.obj"
-                entry, text = mesh_obstacle(obj, depsgraph, file_name)
-                mesh_files[file_name] = text
+                    node = f"{obj.name}_{k}"
+                entry, mesh = mesh_obstacle(obj, depsgraph, mesh_file, node)
+                meshes.append(mesh)
                 obstacles.append(entry)
             else:
                 obstacles.append(obstacle_entry(obj, kind, warnings))
@@ -477,8 +480,8 @@ def build_shot(scene, settings, name=None):
     }
     if obstacles:
         shot["obstacle"] = obstacles
-    if mesh_files:
-        shot[MESH_FILES] = mesh_files
+    if meshes:
+        shot[MESH_FILES] = {mesh_file: glb_writer.glb_bytes(meshes)}
     if targets:
         shot["target"] = targets
     if any(abs(x) > 0 for x in settings.wind):
@@ -504,5 +507,5 @@ def shot_toml(shot, source=""):
 
 def write_mesh_files(shot, folder):
     """Writes the shot's mesh obstacles' files into `folder` (where the shot goes)."""
-    for name, text in shot.get(MESH_FILES, {}).items():
-        (folder / name).write_text(text, encoding="utf-8")
+    for name, data in shot.get(MESH_FILES, {}).items():
+        (folder / name).write_bytes(data)

@@ -51,7 +51,13 @@ pub const EXTENSIONS: &[&str] = &["obj", "stl", "ply", "gltf", "glb"];
 
 /// Reads `path` by its extension (see [`EXTENSIONS`]). `node`: glTF only, the meshes of
 /// the node of that name and of its children (all of the default scene's when `None`).
-pub fn read(path: &Path, node: Option<&str>) -> Result<MeshData, FileError> {
+/// glTF files already parsed, by path: `documents` keeps them for the next obstacle that
+/// names the same file (one parse, not one per node).
+pub fn read(
+    path: &Path,
+    node: Option<&str>,
+    documents: &mut Documents,
+) -> Result<MeshData, FileError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -66,6 +72,10 @@ pub fn read(path: &Path, node: Option<&str>) -> Result<MeshData, FileError> {
         return Err(FileError::whole(format!(
             "no nodes in a .{ext} file: `node` picks a node of a .gltf or .glb file"
         )));
+    }
+    let gltf = ext == "gltf" || ext == "glb";
+    if gltf && let Some(doc) = documents.0.get(path) {
+        return non_empty(doc.meshes(node)?);
     }
     let len = std::fs::metadata(path)
         .map_err(|e| FileError::whole(format!("cannot read it: {e}")))?
@@ -89,13 +99,26 @@ pub fn read(path: &Path, node: Option<&str>) -> Result<MeshData, FileError> {
         }
         "stl" => parse_stl(&bytes)?,
         "ply" => super::mesh_ply::parse_ply(&bytes)?,
-        _ => super::mesh_gltf::parse_gltf(&bytes, path.parent(), node)?,
+        _ => {
+            let doc = super::mesh_gltf::Document::parse(&bytes, path.parent())?;
+            let data = doc.meshes(node);
+            documents.0.insert(path.to_path_buf(), doc);
+            data?
+        }
     };
+    non_empty(data)
+}
+
+fn non_empty(data: MeshData) -> Result<MeshData, FileError> {
     if data.triangles.is_empty() {
         return Err(FileError::whole("the file has no triangles"));
     }
     Ok(data)
 }
+
+/// Parsed glTF files by path, for [`read`]; dropped with the shot's resolution.
+#[derive(Default)]
+pub struct Documents(std::collections::HashMap<std::path::PathBuf, super::mesh_gltf::Document>);
 
 pub(super) fn whole(message: impl Into<String>) -> FileError {
     FileError::whole(message)
@@ -314,5 +337,24 @@ mod tests {
         assert!(parse_stl(&bin[..100]).is_err());
         let e = parse_stl(b"solid t\nouter loop\nvertex 1 0 x\n").unwrap_err();
         assert_eq!(e.line, 3);
+    }
+
+    #[test]
+    fn a_gltf_file_is_parsed_once_for_all_its_nodes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("set.gltf");
+        let text = super::super::mesh_gltf::tests::tetra_gltf(12, None);
+        std::fs::write(&path, &text).unwrap();
+        let mut docs = Documents::default();
+        let rock = read(&path, Some("rock"), &mut docs).unwrap();
+        assert_eq!(rock.triangles.len(), 4);
+        // Later nodes come from the parsed file, not from the disk.
+        std::fs::write(&path, "not glTF").unwrap();
+        assert_eq!(read(&path, Some("set"), &mut docs).unwrap(), rock);
+        assert_eq!(read(&path, None, &mut docs).unwrap(), rock);
+        let e = read(&path, Some("tree"), &mut docs).unwrap_err();
+        assert!(e.message.starts_with(NODE_ERROR), "{}", e.message);
+        // A fresh resolution reads the file again.
+        assert!(read(&path, Some("rock"), &mut Documents::default()).is_err());
     }
 }

@@ -13,12 +13,32 @@ use crate::geometry::mesh::MAX_TRIANGLES;
 /// Nodes may nest this deep (a deeper chain is taken for a cycle).
 const MAX_DEPTH: usize = 256;
 
-/// Reads a glTF or GLB file's bytes; external buffers are read beside it, in `dir`.
-pub fn parse_gltf(
-    bytes: &[u8],
-    dir: Option<&Path>,
-    node: Option<&str>,
-) -> Result<MeshData, FileError> {
+/// The tests' shorthand: parse and take the meshes of `node`.
+#[cfg(test)]
+fn parse_gltf(bytes: &[u8], dir: Option<&Path>, node: Option<&str>) -> Result<MeshData, FileError> {
+    Document::parse(bytes, dir)?.meshes(node)
+}
+
+/// A parsed glTF file and its buffers' bytes: read once, however many of its nodes a shot
+/// takes as obstacles (the Blender add-on writes every mesh obstacle into one .glb).
+pub struct Document {
+    gltf: gltf::Gltf,
+    buffers: Vec<Vec<u8>>,
+}
+
+impl Document {
+    /// Parses a glTF or GLB file's bytes; external buffers are read beside it, in `dir`.
+    pub fn parse(bytes: &[u8], dir: Option<&Path>) -> Result<Document, FileError> {
+        parse_document(bytes, dir)
+    }
+
+    /// The triangles of node `node` and its children, or of every mesh of the scene.
+    pub fn meshes(&self, node: Option<&str>) -> Result<MeshData, FileError> {
+        scene_meshes(&self.gltf, &self.buffers, node)
+    }
+}
+
+fn parse_document(bytes: &[u8], dir: Option<&Path>) -> Result<Document, FileError> {
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| match e {
         gltf::Error::Deserialize(e) if !bytes.starts_with(b"glTF") => {
             // A .gltf file is its JSON: point at the line.
@@ -86,6 +106,14 @@ pub fn parse_gltf(
         }
         buffers.push(data);
     }
+    Ok(Document { gltf, buffers })
+}
+
+fn scene_meshes(
+    gltf: &gltf::Gltf,
+    buffers: &[Vec<u8>],
+    node: Option<&str>,
+) -> Result<MeshData, FileError> {
     let scene = gltf
         .default_scene()
         .or_else(|| gltf.scenes().next())
@@ -99,7 +127,7 @@ pub fn parse_gltf(
             node,
             node.is_none(),
             0,
-            &buffers,
+            buffers,
             &mut out,
             &mut found,
         )?;
@@ -293,7 +321,7 @@ fn base64(s: &str) -> Option<Vec<u8>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     fn b64(data: &[u8]) -> String {
@@ -313,7 +341,7 @@ mod tests {
 
     /// A tetrahedron as a .gltf with an embedded buffer: 4 positions, 12 u16 indices,
     /// placed by a parent node (translated by +2 in x) and a child named "rock".
-    fn tetra_gltf(index_count: usize, extra_index: Option<u16>) -> String {
+    pub(in crate::shot) fn tetra_gltf(index_count: usize, extra_index: Option<u16>) -> String {
         let mut buf = Vec::new();
         for p in [
             [0f32, 0.0, 0.0],

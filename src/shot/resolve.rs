@@ -19,6 +19,8 @@ const MAX_NAME: usize = 100;
 struct Ctx<'a> {
     file: &'a Path,
     loc: Locator<'a>,
+    /// glTF files the shot's mesh obstacles read, each parsed once.
+    documents: std::cell::RefCell<mesh_file::Documents>,
 }
 
 impl Ctx<'_> {
@@ -307,6 +309,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
     let cx = Ctx {
         file,
         loc: Locator::new(src),
+        documents: Default::default(),
     };
     let raw: RawShot = cx.deserialize(src).map_err(|mut e| {
         if e.message.contains("number too large") {
@@ -593,6 +596,7 @@ pub fn load_preset_file(path: &Path, model: ModelKind) -> Result<ParamValues, Sh
     let cx = Ctx {
         file: path,
         loc: Locator::new(&src),
+        documents: Default::default(),
     };
     let raw: RawPresetFile = cx.deserialize(&src).map_err(|mut e| {
         if e.message == "missing field `preset`" {
@@ -1153,7 +1157,8 @@ fn resolve_mesh(
         }
         err
     };
-    let data = mesh_file::read(&path, ro.node.as_deref()).map_err(located)?;
+    let data = mesh_file::read(&path, ro.node.as_deref(), &mut cx.documents.borrow_mut())
+        .map_err(located)?;
     let vertices: Vec<Vec3> = data
         .vertices
         .iter()

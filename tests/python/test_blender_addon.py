@@ -410,12 +410,42 @@ def test_unsupported_obstacle_shapes_are_errors_naming_the_objects(scene, beeswa
     assert not shot_collections("bltest")
 
 
+def read_glb(data):
+    """(glTF JSON, {node name: (float32 positions (n, 3), triangles (t, 3))}) of a .glb of
+    one buffer, every node holding one indexed triangle mesh (what the add-on writes)."""
+    import struct
+    magic, version, length = struct.unpack_from("<4sII", data)
+    assert (magic, version, length) == (b"glTF", 2, len(data))
+    jlen, jtype = struct.unpack_from("<I4s", data, 12)
+    assert jtype == b"JSON"
+    doc = json.loads(data[20:20 + jlen])
+    blen, btype = struct.unpack_from("<I4s", data, 20 + jlen)
+    assert btype == b"BIN\0"
+    blob = data[28 + jlen:28 + jlen + blen]
+
+    def accessor(i, dtype, width):
+        a = doc["accessors"][i]
+        v = doc["bufferViews"][a["bufferView"]]
+        raw = blob[v["byteOffset"]:v["byteOffset"] + v["byteLength"]]
+        return np.frombuffer(raw, dtype=dtype).reshape(a["count"] // (3 // width), 3)
+
+    out = {}
+    for node in doc["nodes"]:
+        assert set(node) == {"name", "mesh"}  # identity transform: vertices are in the world
+        (prim,) = doc["meshes"][node["mesh"]]["primitives"]
+        out[node["name"]] = (accessor(prim["attributes"]["POSITION"], "<f4", 3),
+                             accessor(prim["indices"], "<u4", 1))
+    return doc, out
+
+
 def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, beeswarm_bin,
-                                                                     tmp_path):
+                                                                     tmp_path, node_modules):
     """A monkey head (open: avoided as a shell) and a cone (closed: a solid, not the
-    cylinder it used to become) are written as OBJ meshes in world space, Y-up, with their
-    modifiers; the bake keeps every bee out of them."""
+    cylinder it used to become) are written as two nodes of one .glb beside the shot, in
+    world space, Y-up, with their modifiers; the file passes the Khronos validator and the
+    bake keeps every bee out of them."""
     from mathutils.bvhtree import BVHTree
+    from mathutils.kdtree import KDTree
     bpy.ops.mesh.primitive_monkey_add(size=0.8, location=(0.0, 0.0, 1.0),
                                       rotation=(0.0, 0.0, math.radians(30)))
     monkey = bpy.context.active_object
@@ -439,23 +469,37 @@ def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, bees
     shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
     entries = {o["name"]: o for o in shot["obstacle"]}
     assert entries["Suzanne"] == {"type": "mesh", "name": "Suzanne", "mode": "shell",
-                                  "file": "bltest.Suzanne.obj"}
-    assert entries["cone"] == {"type": "mesh", "name": "cone", "file": "bltest.cone.obj"}
+                                  "file": "bltest.obstacles.glb", "node": "Suzanne"}
+    assert entries["cone"] == {"type": "mesh", "name": "cone", "file": "bltest.obstacles.glb",
+                               "node": "cone"}
     assert "_mesh_files" not in tomllib.loads(shot_builder.shot_toml(shot))
-    text = shot[shot_builder.MESH_FILES]["bltest.Suzanne.obj"]
-    verts = [Vector(map(float, ln.split()[1:])) for ln in text.splitlines() if ln.startswith("v ")]
-    faces = [ln for ln in text.splitlines() if ln.startswith("f ")]
+    data = shot[shot_builder.MESH_FILES]["bltest.obstacles.glb"]
+    # The same scene writes the same bytes.
+    assert shot_builder.build_shot(scene, scene.beeswarm)[0][shot_builder.MESH_FILES] == \
+        {"bltest.obstacles.glb": data}
+    _, nodes = read_glb(data)
+    assert set(nodes) == {"Suzanne", "cone"}
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    ev = monkey.evaluated_get(depsgraph)
-    assert len(verts) == len(ev.data.vertices) > 500  # subdivided: the evaluated mesh
-    assert len(faces) == len(ev.data.loop_triangles)
-    world = [monkey.matrix_world @ v.co for v in ev.data.vertices]
-    assert max((blender_from_shot(a) - b).length for a, b in zip(verts, world)) < 1e-5
+    for obj in (monkey, cone):
+        verts, faces = nodes[obj.name]
+        ev = obj.evaluated_get(depsgraph)
+        assert len(verts) == len(ev.data.vertices)
+        assert len(faces) == len(ev.data.loop_triangles)
+        world = [obj.matrix_world @ v.co for v in ev.data.vertices]
+        assert max((blender_from_shot(a) - b).length for a, b in zip(verts, world)) < 1e-5
+    assert len(nodes["Suzanne"][0]) > 500  # subdivided: the evaluated mesh
+    glb = tmp_path / "obstacles.glb"
+    glb.write_bytes(data)
+    env = dict(os.environ, BEESWARM_NODE_MODULES=node_modules, NODE_PATH=node_modules)
+    run = subprocess.run(["node", str(ROOT / "tests" / "node" / "validate_gltf.mjs"), str(glb)],
+                         capture_output=True, text=True, env=env)
+    assert run.returncode == 0, run.stderr
+    issues = json.loads(run.stdout)["issues"]
+    assert issues["numErrors"] == issues["numWarnings"] == 0, issues["messages"][:10]
 
     assert run_bake(beeswarm_bin, "USD") == {"FINISHED"}
     folder = tmp_path / "beeswarm_cache" / "bltest"
-    assert {"bltest.Suzanne.obj", "bltest.cone.obj", "bltest.shot.toml"} <= \
-        {p.name for p in folder.iterdir()}
+    assert {"bltest.obstacles.glb", "bltest.shot.toml"} <= {p.name for p in folder.iterdir()}
     tracks = read_tracks(folder / "bltest.tracks.csv")
     trees = {o.name: BVHTree.FromObject(o, depsgraph) for o in (monkey, cone)}
     gaps = {name: [] for name in trees}
@@ -477,6 +521,20 @@ def test_any_mesh_is_an_obstacle_written_beside_the_shot_and_avoided(scene, bees
     assert min(gaps["cone"]) > 0.0, min(gaps["cone"])
     # The swarm met the monkey on its way to the nest.
     assert sum(g < 0.1 for g in gaps["Suzanne"]) > 20, sorted(gaps["Suzanne"])[:5]
+
+    # Blender's own glTF importer reads the file back where the objects are.
+    bpy.ops.import_scene.gltf(filepath=str(folder / "bltest.obstacles.glb"))
+    for obj in (monkey, cone):
+        back = bpy.data.objects[obj.name + ".001"]
+        ev = obj.evaluated_get(depsgraph)
+        assert len(back.data.vertices) == len(ev.data.vertices)
+        tree = KDTree(len(ev.data.vertices))
+        for k, v in enumerate(ev.data.vertices):
+            tree.insert(obj.matrix_world @ v.co, k)
+        tree.balance()
+        hits = [tree.find(back.matrix_world @ v.co) for v in back.data.vertices]
+        assert max(d for _, _, d in hits) < 1e-5
+        assert len({k for _, k, _ in hits}) == len(hits)  # one to one
 
 
 def test_binary_errors_name_the_blender_object(scene, beeswarm_bin):
