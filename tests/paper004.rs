@@ -275,3 +275,35 @@ fn the_follower_chases_the_leader() {
     println!("chasing: median gap {m:.2} m, largest {max:.2} m after 3 s");
     assert!(m < 1.5 && max < 4.5, "{m} {max}");
 }
+
+/// The path example with `params` for its swarm (and `count` butterflies): the bake and
+/// the mean distance to the guide after the first 2 s (60 frames).
+fn path_run(count: usize, params: &str) -> (Baked, f32) {
+    let src = example_text("butterfly_path.toml");
+    let text = src
+        .replace("count = 1\n", &format!("count = {count}\n"))
+        .replace(
+            "preset = \"monarch\"\n",
+            &format!("preset = \"monarch\"\nparams = {{ {params} }}\n"),
+        );
+    assert_ne!(text, src);
+    let b = bake_shot(common::shot(&text));
+    let guide = &b.shot.targets[0];
+    let mut err = Vec::new();
+    for (k, f) in b.pos.iter().enumerate().skip(60) {
+        let g = guide.position_at((b.shot.frame_start as usize + k) as f64);
+        err.extend(f[0].iter().map(|p| p.distance(g)));
+    }
+    let e = mean(&err);
+    (b, e)
+}
+
+/// Sec. 5.2 / Fig. 8: the vortex force makes the path noisy, so without it (η = 0) the
+/// butterfly keeps closer to the guide it follows.
+#[test]
+fn path_error_is_lower_without_the_vortex_force() {
+    let (_, with) = path_run(8, "eta = 3.66");
+    let (_, without) = path_run(8, "eta = 0");
+    println!("mean distance to the guide after 2 s: η = 3.66 {with:.3} m, η = 0 {without:.3} m");
+    assert!(without < with, "{without} vs {with}");
+}
