@@ -225,15 +225,7 @@ fn avoidance_roll_in_the_shafts() {
     // Eq. 4 rocks the body by at most 19.7°: the avoidance must go well past it.
     assert!(peak > 38.0, "peak avoidance roll {peak}°");
     // The 120-bee row of shafts of tests/model_behaviour.rs.
-    let mut src = String::from(
-        "[scene]\nfps = 24\nframes = [1, 145]\nsubsteps = 4\nseed = 2\n[[swarm]]\ncount = 120\npreset = \"optimized\"\nspawn = { shape = \"box\", center = [-1, 1, 0], size = [0.4, 0.4, 1.2] }\nparams = { speed = 1.5 }\n[[target]]\ntype = \"attractor\"\nposition = [1.5, 1, 0]\nstrength = 4\n",
-    );
-    for k in 0..7 {
-        let z = -0.6 + 0.2 * k as f32;
-        src += &format!(
-            "[[obstacle]]\ntype = \"shaft\"\na = [0, 0, {z}]\nb = [0, 2, {z}]\nradius = 0.025\n"
-        );
-    }
+    let src = common::shafts_src();
     let f = record_all(Simulation::new(&shot(&src)));
     let peak = f.iter().flatten().map(|r| r.roll.abs()).fold(0.0, f32::max);
     let past25 = f.iter().flatten().filter(|r| r.roll.abs() > 25.0).count();

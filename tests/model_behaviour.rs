@@ -160,15 +160,7 @@ strength = 6
 
 #[test]
 fn a_swarm_passing_a_row_of_shafts_has_zero_penetrations() {
-    let mut src = String::from(
-        "[scene]\nfps = 24\nframes = [1, 145]\nsubsteps = 4\nseed = 2\n[[swarm]]\ncount = 120\npreset = \"optimized\"\nspawn = { shape = \"box\", center = [-1, 1, 0], size = [0.4, 0.4, 1.2] }\nparams = { speed = 1.5 }\n[[target]]\ntype = \"attractor\"\nposition = [1.5, 1, 0]\nstrength = 4\n",
-    );
-    for k in 0..7 {
-        let z = -0.6 + 0.2 * k as f32;
-        src += &format!(
-            "[[obstacle]]\ntype = \"shaft\"\na = [0, 0, {z}]\nb = [0, 2, {z}]\nradius = 0.025\n"
-        );
-    }
+    let src = common::shafts_src();
     let sh = shot(&src);
     let r = sh.swarms[0].bee.radius;
     let mut penetrations = 0;

@@ -171,3 +171,18 @@ pub fn turnarounds(d: &[f32], depth: f32) -> Vec<f32> {
     }
     out
 }
+
+/// 120 bees flying through a row of seven vertical shafts towards an attractor (the roll
+/// and penetration tests' scene), as shot text.
+pub fn shafts_src() -> String {
+    let mut src = String::from(
+        "[scene]\nfps = 24\nframes = [1, 145]\nsubsteps = 4\nseed = 2\n[[swarm]]\ncount = 120\npreset = \"optimized\"\nspawn = { shape = \"box\", center = [-1, 1, 0], size = [0.4, 0.4, 1.2] }\nparams = { speed = 1.5 }\n[[target]]\ntype = \"attractor\"\nposition = [1.5, 1, 0]\nstrength = 4\n",
+    );
+    for k in 0..7 {
+        let z = -0.6 + 0.2 * k as f32;
+        src += &format!(
+            "[[obstacle]]\ntype = \"shaft\"\na = [0, 0, {z}]\nb = [0, 2, {z}]\nradius = 0.025\n"
+        );
+    }
+    src
+}
