@@ -18,7 +18,7 @@ use super::tracks::{self, Dataset, Track, TrackFormat};
 use crate::atomic::AtomicFile;
 use crate::error::{Error, Result};
 use crate::model::{ModelKind, ParamValues};
-use crate::plot::{Figure, bold, palette, px, text, tick_label};
+use crate::plot::{Figure, bold, house_axes, palette, px, text};
 use crate::progress::Mode;
 use crate::shot::Shot;
 use crate::sim::Simulation;
@@ -791,18 +791,9 @@ pub fn fitness_figure(r: &GaResult, name: &str) -> Result<Figure> {
             .x_label_area_size(px(46.0))
             .y_label_area_size(px(64.0))
             .build_cartesian_2d(1.0..n.max(2) as f64, y0..y1)?;
-        chart
-            .configure_mesh()
+        house_axes(&mut chart.configure_mesh(), 13.0)
             .x_desc("generation")
             .y_desc("fitness q")
-            .x_label_formatter(&|x| tick_label(*x))
-            .y_label_formatter(&|y| tick_label(*y))
-            .label_style(text(13.0, palette::TEXT))
-            .axis_desc_style(text(14.0, palette::TEXT))
-            .bold_line_style(palette::GRID.stroke_width(px(1.0) as u32))
-            .light_line_style(TRANSPARENT)
-            .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
-            .set_all_tick_mark_size(px(4.0))
             // Generations are whole numbers: no more labels than generations.
             .x_labels(n.clamp(2, 10))
             .draw()?;

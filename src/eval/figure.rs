@@ -4,7 +4,7 @@
 
 use super::report::Report;
 use crate::error::Result;
-use crate::plot::{Figure, Legend, Mark, bold, palette, px, text, tick_label};
+use crate::plot::{Figure, Legend, Mark, bold, house_axes, palette, px, text};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -94,17 +94,8 @@ pub fn draw(report: &Report) -> Result<Figure> {
                 .x_label_area_size(px(24.0))
                 .y_label_area_size(px(58.0))
                 .build_cartesian_2d(bins.lo..bins.hi, 0.0..ytop)?;
-            chart
-                .configure_mesh()
+            house_axes(&mut chart.configure_mesh(), 12.0)
                 .y_desc("probability")
-                .x_label_formatter(&|x| tick_label(*x))
-                .y_label_formatter(&|y| tick_label(*y))
-                .label_style(text(12.0, palette::TEXT))
-                .axis_desc_style(text(13.0, palette::TEXT))
-                .bold_line_style(palette::GRID.stroke_width(px(1.0) as u32))
-                .light_line_style(TRANSPARENT)
-                .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
-                .set_all_tick_mark_size(px(4.0))
                 .x_labels(6)
                 .y_labels(5)
                 .draw()?;

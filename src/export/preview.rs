@@ -14,7 +14,9 @@
 use super::CacheWriter;
 use crate::atomic::{AtomicFile, SealedFile};
 use crate::error::{Error, Result};
-use crate::plot::{Area, DrawResult, Figure, Legend, Mark, bold, palette, px, text, tick_label};
+use crate::plot::{
+    Area, DrawResult, Figure, Legend, Mark, bold, house_axes, palette, px, text, tick_label,
+};
 use crate::shot::{Obstacle, Shape, Shot, Target, TargetKind};
 use crate::sim::{CacheMeta, Frame};
 use glam::Vec3;
@@ -240,18 +242,12 @@ impl PreviewWriter {
             .y_label_area_size(px(Y_LABELS))
             .build_cartesian_2d(v.x.0..v.x.1, v.y.0..v.y.1)?;
         let flip = |y: &f64| tick_label(if v.top { -*y } else { *y });
-        chart
-            .configure_mesh()
+        house_axes(&mut chart.configure_mesh(), 13.0)
             .x_desc("x (m)")
             .y_desc(if v.top { "z (m)" } else { "y (m)" })
             .y_label_formatter(&flip)
-            .x_label_formatter(&|x| tick_label(*x))
-            .label_style(text(13.0, palette::TEXT))
-            .axis_desc_style(text(14.0, palette::TEXT))
+            // A lighter grid under the paths.
             .bold_line_style(palette::GRID.mix(0.8).stroke_width(px(1.0) as u32))
-            .light_line_style(TRANSPARENT)
-            .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
-            .set_all_tick_mark_size(px(4.0))
             .x_labels(7)
             .y_labels(7)
             .draw()?;

@@ -29,6 +29,34 @@ pub fn tick_label(v: f64) -> String {
     s.replace('-', "\u{2212}")
 }
 
+/// [`tick_label`] in the shape plotters' label formatters take.
+fn tick(v: &f64) -> String {
+    tick_label(*v)
+}
+
+/// Every chart's axes: [`tick_label`] numbers, tick labels of `size` points and axis
+/// titles one point larger, grid lines on the major ticks only, grey axes and 4 px tick
+/// marks. Callers add their titles and label counts, and may override any of it.
+pub fn house_axes<'m, 'a, 'b, X, Y, DB>(
+    mesh: &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>,
+    size: f64,
+) -> &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>
+where
+    X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+    DB: plotters::prelude::DrawingBackend,
+{
+    use plotters::style::{Color, TRANSPARENT};
+    mesh.x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .label_style(text(size, palette::TEXT))
+        .axis_desc_style(text(size + 1.0, palette::TEXT))
+        .bold_line_style(palette::GRID.stroke_width(px(1.0) as u32))
+        .light_line_style(TRANSPARENT)
+        .axis_style(palette::GREY.stroke_width(px(1.0) as u32))
+        .set_all_tick_mark_size(px(4.0))
+}
+
 /// Colours used across figures, chosen to stay distinguishable on white and when printed.
 pub mod palette {
     use plotters::style::RGBColor;
