@@ -127,37 +127,67 @@ fn no_body_is_ever_inside_an_obstacle() {
         ) else {
             continue;
         };
-        let radius = shot.swarms[0].bee.radius;
-        let mut sim = Simulation::new(&shot);
-        loop {
-            for s in sim.record() {
-                for (p, scale) in s.position.iter().zip(&s.scale) {
-                    let ri = radius * scale;
-                    for o in &shot.obstacles {
-                        let gap = signed_distance(&o.shape, *p) - ri;
-                        worst = worst.min(gap);
-                        assert!(
-                            gap > -1e-4,
-                            "case {case}, frame {}: a body {:.2} mm inside {}\n{src}",
-                            sim.frame(),
-                            -gap * 1e3,
-                            o.name
-                        );
-                        checked += 1;
-                    }
-                }
-            }
-            if sim.done() {
-                break;
-            }
-            sim.advance();
-        }
+        let gaps = every_gap(&shot, &src, case, |k, p| {
+            signed_distance(&shot.obstacles[k].shape, p)
+        });
+        checked += gaps.checked;
+        worst = worst.min(gaps.smallest);
     }
     println!(
         "{checked} body–obstacle checks, smallest gap {:.4} mm",
         worst * 1e3
     );
     assert!(checked > 100_000, "the cases must run: {checked}");
+}
+
+/// What [`every_gap`] saw: body–obstacle pairs checked, the smallest gap (m), and gaps
+/// under 1 mm.
+struct Gaps {
+    checked: usize,
+    smallest: f32,
+    touching: usize,
+}
+
+/// Bakes `shot` frame by frame and asserts that no body is inside any obstacle, with
+/// `distance(k, p)` the signed distance from p to obstacle k (negative inside); `src` and
+/// `case` name the scene in a failure.
+fn every_gap(
+    shot: &beeswarm::shot::Shot,
+    src: &str,
+    case: u64,
+    distance: impl Fn(usize, Vec3) -> f32,
+) -> Gaps {
+    let radius = shot.swarms[0].bee.radius;
+    let mut gaps = Gaps {
+        checked: 0,
+        smallest: f32::INFINITY,
+        touching: 0,
+    };
+    let mut sim = Simulation::new(shot);
+    loop {
+        for s in sim.record() {
+            for (p, scale) in s.position.iter().zip(&s.scale) {
+                let ri = radius * scale;
+                for (k, o) in shot.obstacles.iter().enumerate() {
+                    let gap = distance(k, *p) - ri;
+                    gaps.smallest = gaps.smallest.min(gap);
+                    gaps.touching += usize::from(gap < 1e-3);
+                    assert!(
+                        gap > -1e-4,
+                        "case {case}, frame {}: a body {:.2} mm inside {}\n{src}",
+                        sim.frame(),
+                        -gap * 1e3,
+                        o.name
+                    );
+                    gaps.checked += 1;
+                }
+            }
+        }
+        if sim.done() {
+            return gaps;
+        }
+        sim.advance();
+    }
 }
 
 /// A random closed blob as OBJ text: a sphere whose radius varies smoothly with direction
@@ -440,7 +470,6 @@ fn no_body_is_ever_inside_a_mesh_obstacle() {
         let Ok(shot) = beeswarm::shot::parse(&src, &dir.path().join("t.toml"), dir.path()) else {
             continue;
         };
-        let radius = shot.swarms[0].bee.radius;
         let meshes: Vec<(Vec<[Vec3; 3]>, MeshMode)> = shot
             .obstacles
             .iter()
@@ -449,31 +478,13 @@ fn no_body_is_ever_inside_a_mesh_obstacle() {
                 _ => unreachable!("mesh scenes hold meshes only"),
             })
             .collect();
-        let mut sim = Simulation::new(&shot);
-        loop {
-            for s in sim.record() {
-                for (p, scale) in s.position.iter().zip(&s.scale) {
-                    let ri = radius * scale;
-                    for (o, (tris, mode)) in shot.obstacles.iter().zip(&meshes) {
-                        let gap = brute_signed_distance(tris, *mode, *p) - ri;
-                        worst = worst.min(gap);
-                        touching += usize::from(gap < 1e-3);
-                        assert!(
-                            gap > -1e-4,
-                            "case {case}, frame {}: a body {:.2} mm inside {}\n{src}",
-                            sim.frame(),
-                            -gap * 1e3,
-                            o.name
-                        );
-                        checked += 1;
-                    }
-                }
-            }
-            if sim.done() {
-                break;
-            }
-            sim.advance();
-        }
+        let gaps = every_gap(&shot, &src, case, |k, p| {
+            let (tris, mode) = &meshes[k];
+            brute_signed_distance(tris, *mode, p)
+        });
+        checked += gaps.checked;
+        worst = worst.min(gaps.smallest);
+        touching += gaps.touching;
     }
     println!(
         "{checked} body–mesh checks, {touching} within 1 mm of a surface, smallest gap {:.4} mm",
