@@ -111,6 +111,8 @@ pub fn bake_resumable(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Vec<PathBuf>> {
     prepare_out_dir(opts.out_dir)?;
+    // One bake of a shot into a folder at a time; held until the set is committed.
+    let _lock = crate::cache_set::lock(opts.out_dir, &shot.name)?;
     // What bakes killed outright (kill -9, out of memory) left here goes first.
     crate::cache_set::remove_stale_temporaries(opts.out_dir, &shot.name);
     let start = Instant::now();

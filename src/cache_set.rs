@@ -216,6 +216,96 @@ pub fn remove_stale_temporaries(dir: &Path, shot_name: &str) -> usize {
     removed
 }
 
+/// The right to write shot `<name>`'s set into a folder, held for a whole bake: a second
+/// bake of the same shot into the same folder would interleave its renames with the
+/// first's (a set mixing two bakes) and remove the other's checkpoint. The lock is an
+/// advisory file lock (`flock`) on `.<name>.beeswarm.lock`, which the system releases
+/// when the process ends however it ends, so a killed bake never blocks the next one. The
+/// file holds the owner's process id, for the error message, and is removed when the
+/// lock is dropped.
+#[derive(Debug)]
+pub struct BakeLock {
+    path: PathBuf,
+    _file: std::fs::File,
+}
+
+/// The lock file of shot `shot_name` in `dir`.
+pub fn lock_path(dir: &Path, shot_name: &str) -> PathBuf {
+    dir.join(format!(".{shot_name}.beeswarm.lock"))
+}
+
+/// Takes [`BakeLock`] for `shot_name` in `dir`, or fails at once (exit code 1) naming the
+/// process that holds it; never waits.
+pub fn lock(dir: &Path, shot_name: &str) -> Result<BakeLock> {
+    use std::io::{Seek, Write};
+    let path = lock_path(dir, shot_name);
+    // A holder removes the file before it unlocks; a file we opened just before that
+    // removal is no longer the one at `path` once we hold its lock, so open again.
+    for _ in 0..8 {
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(|e| Error::io(&path, e))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut owner = String::new();
+                let _ = file.read_to_string(&mut owner);
+                let owner = match owner.trim().parse::<u32>() {
+                    Ok(pid) => format!("process {pid}"),
+                    Err(_) => "another process".to_string(),
+                };
+                return Err(Error::bake(format!(
+                    "another bake ({owner}) is writing shot '{shot_name}' into {}; wait for it \
+                     to finish or bake into another folder (--out)",
+                    dir.display()
+                )));
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(&path, e)),
+        }
+        if !same_file(&file, &path) {
+            continue;
+        }
+        let written = file
+            .set_len(0)
+            .and_then(|_| file.rewind())
+            .and_then(|_| writeln!(file, "{}", std::process::id()));
+        written.map_err(|e| Error::io(&path, e))?;
+        return Ok(BakeLock { path, _file: file });
+    }
+    Err(Error::bake(format!(
+        "could not lock {}: it kept being replaced",
+        path.display()
+    )))
+}
+
+/// Whether the open `file` is the one now at `path`.
+fn same_file(file: &std::fs::File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (file.metadata(), std::fs::metadata(path)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = file;
+        path.exists()
+    }
+}
+
+impl Drop for BakeLock {
+    fn drop(&mut self) {
+        // Removed while still locked (the file closes after this), see `lock`.
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
 /// Size and SHA-256 of a file, read in 1 MiB blocks; stops on an interrupt.
 pub fn hash_file(path: &Path) -> Result<(u64, String)> {
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;

@@ -147,8 +147,11 @@ fn kill_9_at_ten_moments_never_leaves_a_mixed_set_or_scratch_files() {
         // Whatever the moment, every file of ours there is one the manifest accounts for.
         for f in files_under(&folder) {
             let name = f.rsplit('/').next().unwrap();
+            // The bake lock's file stays after `kill -9` (its lock does not); the next
+            // bake takes it over and removes it.
             let accounted = is_temporary(name)
                 || f == "hive.beeswarm.json"
+                || f == ".hive.beeswarm.lock"
                 || m.files.iter().any(|e| e.path == f)
                 || m.replacing.contains(&f);
             assert!(accounted, "{point}: {f} is in no set: {m:?}");
@@ -159,6 +162,7 @@ fn kill_9_at_ten_moments_never_leaves_a_mixed_set_or_scratch_files() {
             next_formats[i % next_formats.len()],
         );
     }
+    assert!(!cache_set::lock_path(&folder, "hive").exists());
     assert!(
         scratch_left > 0,
         "the kills left scratch files, which the next bakes removed"

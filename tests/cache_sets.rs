@@ -224,3 +224,55 @@ fn an_unfinished_replacement_is_reported_and_completed_by_the_next_bake() {
     assert_eq!(files_under(&out), listed(&set(&out)));
     assert_eq!(files_under(&out), ["hive.beeswarm.json", "hive.tracks.csv"]);
 }
+
+#[test]
+fn a_second_bake_of_the_same_shot_into_the_same_folder_is_refused_while_the_first_runs() {
+    let (dir, out) = setup();
+    std::fs::create_dir_all(&out).unwrap();
+    baked(dir.path(), &["--format", "csv"]);
+    let before = set(&out);
+    // Held as a running bake holds it (the lock is per process, not per thread, so the
+    // binary, another process, sees it).
+    let held = cache_set::lock(&out, "hive").unwrap();
+    let (code, stderr) = bake(dir.path(), &["--format", "csv", "--seed", "9"]);
+    assert_eq!(code, 1, "{stderr}");
+    let pid = std::process::id().to_string();
+    assert!(
+        stderr.contains("another bake") && stderr.contains(&pid) && stderr.contains("--out"),
+        "{stderr}"
+    );
+    assert_eq!(set(&out), before, "the refused bake touched the set");
+    // Another shot into the same folder is not held up.
+    std::fs::write(
+        dir.path().join("other.toml"),
+        SHOT.replace("\"hive\"", "\"other\""),
+    )
+    .unwrap();
+    let other = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .current_dir(dir.path())
+        .args(["bake", "other.toml", "--out", "out", "--format", "csv"])
+        .args(["--progress", "none"])
+        .output()
+        .unwrap();
+    assert!(other.status.success());
+    drop(held);
+    assert!(!cache_set::lock_path(&out, "hive").exists());
+    baked(dir.path(), &["--format", "csv", "--seed", "9"]);
+    assert_ne!(set(&out), before);
+    assert!(
+        !cache_set::lock_path(&out, "hive").exists(),
+        "a finished bake leaves its lock file behind"
+    );
+}
+
+#[test]
+fn a_lock_file_left_by_a_killed_bake_does_not_block_the_next() {
+    let (dir, out) = setup();
+    std::fs::create_dir_all(&out).unwrap();
+    // What `kill -9` leaves: the file, with a process id, but no lock (the system drops
+    // it with the process).
+    std::fs::write(cache_set::lock_path(&out, "hive"), "4194303\n").unwrap();
+    baked(dir.path(), &["--format", "csv"]);
+    set(&out);
+    assert!(!cache_set::lock_path(&out, "hive").exists());
+}
