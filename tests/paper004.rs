@@ -192,7 +192,38 @@ fn heavier_butterflies_fly_lower_and_flap_faster() {
 /// their values before the gust.
 #[test]
 fn speed_recovers_within_seconds_after_the_gust() {
-    let b = bake("butterfly_wind.toml");
+    // One seed's ten butterflies make a noisy measure (a change in the last bits of the
+    // angle of attack moved it from 1.0 s to 4.0 s): the claim is asserted on the median
+    // of eight seeds.
+    let text = example_text("butterfly_wind.toml");
+    assert!(text.contains("\nseed = 5"));
+    let mut times = Vec::new();
+    for seed in 5..13 {
+        let b = bake_shot(common::shot(
+            &text.replace("\nseed = 5", &format!("\nseed = {seed}")),
+        ));
+        let (speed0, dist0, dist_gust, recovered) = recovery(&b);
+        println!(
+            "seed {seed}: before the gust median speed {speed0:.2} m/s, {dist0:.2} m from the \
+             flower; at the gust's end {dist_gust:.2} m; back within 25 % / 20 % after \
+             {recovered:?} s"
+        );
+        assert!(
+            dist_gust > 1.5 * dist0,
+            "the gust must push them off: {dist_gust} vs {dist0}"
+        );
+        times.push(recovered.expect("never recovered"));
+    }
+    let m = median(times.clone());
+    println!("median recovery {m:.2} s over {times:?}");
+    assert!(m < 3.0, "{m}");
+}
+
+/// Group medians before and after the gust (`butterfly_wind.toml`'s `gust_*` params):
+/// speed and distance to the flower two seconds before it starts, the distance in its
+/// last second, and how long after it ends until a one-second window's median speed is
+/// back within 25 % and the median distance within 20 %.
+fn recovery(b: &Baked) -> (f32, f32, f32, Option<f32>) {
     let fps = b.shot.fps as f32;
     let p = &b.shot.swarms[0].params;
     let (start, end) = (
@@ -213,26 +244,15 @@ fn speed_recovers_within_seconds_after_the_gust() {
     };
     let (speed0, dist0) = window(start - 2.0);
     let (_, dist_gust) = window(end - 1.0);
-    let mut recovered = None;
     let mut t = end;
     while t + 1.0 < b.pos.len() as f32 / fps {
         let (s, d) = window(t);
         if (s - speed0).abs() <= 0.25 * speed0 && d <= 1.2 * dist0 {
-            recovered = Some(t - end);
-            break;
+            return (speed0, dist0, dist_gust, Some(t - end));
         }
         t += 1.0 / fps;
     }
-    println!(
-        "before the gust: median speed {speed0:.2} m/s, {dist0:.2} m from the flower; \
-         at the gust's end {dist_gust:.2} m; back within 25 % / 20 % after {recovered:?} s"
-    );
-    assert!(
-        dist_gust > 1.5 * dist0,
-        "the gust must push them off: {dist_gust} vs {dist0}"
-    );
-    let r = recovered.expect("never recovered");
-    assert!(r < 3.0, "{r}");
+    (speed0, dist0, dist_gust, None)
 }
 
 /// No butterfly is ever inside an obstacle or under the ground, in any example.

@@ -273,41 +273,15 @@ fn element_force_along(v: Vec3, vn: f32, vs: f32, normal: Vec3, area: f32, densi
     }
     // |Vᵗ|² by Pythagoras (normal and span are orthonormal) instead of building the vector.
     let across = (speed2 - vn * vn - vs * vs).max(0.0).sqrt();
-    let alpha = atan2_deg(vn.abs(), across);
+    // The polynomial atan2 the bee model uses: the library's was a third of these
+    // instructions.
+    let alpha = crate::math::atan2(vn.abs(), across).to_degrees();
     let q = 0.5 * density * area * speed2;
     let dir = v / speed2.sqrt();
     // The air pushes the wing towards the side it flows to.
     let push = normal * vn.signum();
     let lift_dir = normalize_or(push - dir * push.dot(dir), Vec3::ZERO);
     dir * (q * drag_coefficient(alpha)) + lift_dir * (q * lift_coefficient(alpha))
-}
-
-/// atan2(y, x) in degrees for y, x ≥ 0 (the angle of attack, 0°–90°), to within 2e-6°
-/// (f32 rounding): the library's atan2 was a third of the aerodynamics' instructions.
-/// The ratio r = min/max ∈ [0, 1] is reduced to |t| ≤ √2 − 1 by atan r = π/4 + atan t,
-/// t = (r − 1)/(r + 1), where atan's Taylor series to t¹⁵ is within 2e-8 rad.
-#[inline]
-pub fn atan2_deg(y: f32, x: f32) -> f32 {
-    let (lo, hi) = if y <= x { (y, x) } else { (x, y) };
-    if hi <= 0.0 {
-        return 0.0;
-    }
-    let r = lo / hi;
-    let (t, base) = if r > std::f32::consts::SQRT_2 - 1.0 {
-        ((r - 1.0) / (r + 1.0), std::f32::consts::FRAC_PI_4)
-    } else {
-        (r, 0.0)
-    };
-    let t2 = t * t;
-    let series = t
-        * (1.0
-            + t2 * (-1.0 / 3.0
-                + t2 * (1.0 / 5.0
-                    + t2 * (-1.0 / 7.0
-                        + t2 * (1.0 / 9.0
-                            + t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 + t2 * (-1.0 / 15.0))))))));
-    let a = (base + series).to_degrees();
-    if y <= x { a } else { 90.0 - a }
 }
 
 #[cfg(test)]
@@ -335,23 +309,6 @@ mod tests {
         let v = Vec3::new(-1.0, 1.0, 0.0);
         let f = element_force(v, Vec3::Y, Vec3::Z, 0.01, 1.2);
         assert!(f.y > 0.0 && f.x < 0.0, "{f}");
-    }
-
-    #[test]
-    fn atan2_deg_matches_the_library_to_rounding() {
-        let mut worst = 0.0f64;
-        for i in 0..=400 {
-            for j in 0..=400 {
-                let (y, x) = (i as f32 * 0.0137, j as f32 * 0.0211);
-                let expect = if i == 0 && j == 0 {
-                    0.0
-                } else {
-                    (y as f64).atan2(x as f64).to_degrees()
-                };
-                worst = worst.max((atan2_deg(y, x) as f64 - expect).abs());
-            }
-        }
-        assert!(worst < 1e-5, "{worst}");
     }
 
     #[test]
