@@ -1379,6 +1379,63 @@ fn turn_samples(s: &mut String, ind: &str, samples: &[(i32, f32)]) {
     let _ = writeln!(s, "{ind}}}");
 }
 
+/// Merges the `seam` vertices equal in position and normal (where a part's material prims
+/// meet), remapping `indices`: the surface and its shading are unchanged, and readers that
+/// check for weldable points (Omniverse's asset validator) have none to report. Other
+/// vertices stay apart: two closed shells touching at a pole would otherwise become one
+/// non-manifold vertex. Vertices keep the order of their first use (deterministic).
+fn weld(
+    points: &[Vec3],
+    normals: &[Vec3],
+    seam: &[bool],
+    indices: &mut [i32],
+) -> (Vec<Vec3>, Vec<Vec3>) {
+    let key = |i: usize| {
+        let (p, n) = (points[i], normals[i]);
+        // +0.0 and -0.0 are one position; bits make the key exact and hashable. A vertex
+        // off the seams keys on its index (NaN bits never come from a finite mesh).
+        if seam[i] {
+            [p.x, p.y, p.z, n.x, n.y, n.z].map(|v| (v + 0.0).to_bits())
+        } else {
+            [u32::MAX, i as u32, 0, 0, 0, 0]
+        }
+    };
+    let mut first = std::collections::HashMap::with_capacity(points.len());
+    let mut remap = Vec::with_capacity(points.len());
+    let (mut out_p, mut out_n) = (Vec::new(), Vec::new());
+    for i in 0..points.len() {
+        let next = out_p.len() as i32;
+        let j = *first.entry(key(i)).or_insert(next);
+        if j == next {
+            out_p.push(points[i]);
+            out_n.push(normals[i]);
+        }
+        remap.push(j);
+    }
+    for i in indices.iter_mut() {
+        *i = remap[*i as usize];
+    }
+    (out_p, out_n)
+}
+
+/// Which of a triangle list's `n` vertices lie on an edge of only one triangle.
+fn open_edge_vertices(indices: &[u16], n: usize) -> Vec<bool> {
+    let mut uses = std::collections::HashMap::new();
+    for t in indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *uses.entry((a.min(b), a.max(b))).or_insert(0u32) += 1;
+        }
+    }
+    let mut open = vec![false; n];
+    for (&(a, b), &k) in &uses {
+        if k == 1 {
+            open[a as usize] = true;
+            open[b as usize] = true;
+        }
+    }
+    open
+}
+
 /// One mesh prim of the prototype: triangles with vertex normals, bound to the shot's
 /// `Looks` materials (one `GeomSubset` per material when it has several, as the body's
 /// bands), with `displayColor`/`displayOpacity` for viewers that draw no materials.
@@ -1387,12 +1444,15 @@ fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
     let mut points: Vec<Vec3> = Vec::new();
     let mut normals: Vec<Vec3> = Vec::new();
     let mut indices: Vec<i32> = Vec::new();
+    // Vertices on an open edge of their prim: where two material prims meet.
+    let mut seam: Vec<bool> = Vec::new();
     // Faces per material, in order of first use.
     let mut subsets: Vec<(usize, Vec<usize>)> = Vec::new();
     let mut face_material = Vec::new();
     for (prim, m) in &part.prims {
         let base = points.len() as i32;
         let first_face = indices.len() / 3;
+        seam.extend(open_edge_vertices(&prim.indices, prim.positions.len()));
         points.extend(prim.positions.iter().map(|p| Vec3::from(*p)));
         normals.extend(prim.normals.iter().map(|n| Vec3::from(*n)));
         indices.extend(prim.indices.iter().map(|&i| base + i as i32));
@@ -1403,6 +1463,7 @@ fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
             None => subsets.push((*m, faces.collect())),
         }
     }
+    let (points, normals) = weld(&points, &normals, &seam, &mut indices);
     let vec3_list = |vs: &[Vec3]| {
         let mut t = Vec::new();
         for (i, v) in vs.iter().enumerate() {
@@ -1457,20 +1518,29 @@ fn mesh_text(s: &mut String, looks: &str, part: &ProtoPart, turn: Turn) {
         vec3_list(&normals)
     );
     let _ = writeln!(s, "{ind}point3f[] points = [{}]", vec3_list(&points));
-    let colour = |m: usize| Vec3::from(material(m).2);
-    let (colours, interpolation) = if subsets.len() == 1 {
-        (vec![colour(subsets[0].0)], "constant")
+    // One colour per material, indexed per face (an indexed primvar: the colours repeat).
+    let palette: Vec<Vec3> = subsets
+        .iter()
+        .map(|&(m, _)| Vec3::from(material(m).2))
+        .collect();
+    let interpolation = if subsets.len() == 1 {
+        "constant"
     } else {
-        (
-            face_material.iter().map(|&m| colour(m)).collect(),
-            "uniform",
-        )
+        "uniform"
     };
     let _ = writeln!(
         s,
         "{ind}color3f[] primvars:displayColor = [{}] (\n{ind}    interpolation = \"{interpolation}\"\n{ind})",
-        vec3_list(&colours)
+        vec3_list(&palette)
     );
+    if subsets.len() > 1 {
+        let slot = |m: usize| subsets.iter().position(|&(mm, _)| mm == m).unwrap_or(0) as i64;
+        let _ = writeln!(
+            s,
+            "{ind}int[] primvars:displayColor:indices = [{}]",
+            ints(&mut face_material.iter().map(|&m| slot(m)))
+        );
+    }
     if membrane {
         let _ = writeln!(
             s,
