@@ -131,6 +131,14 @@ impl Grid {
     /// when the swarm is spread so widely that the grid would need more than the cell
     /// budget (32 per agent, at most 2^25).
     pub fn build(&mut self, positions: &[Vec3], radius: f32) {
+        self.build_except(positions, radius, &[]);
+    }
+
+    /// As [`Grid::build`], leaving out every point `i` with `except[i]` (agents out of
+    /// the world, such as bees inside their hive): queries never return them. `except` is
+    /// empty (leave out none) or one flag per point.
+    pub fn build_except(&mut self, positions: &[Vec3], radius: f32, except: &[bool]) {
+        debug_assert!(except.is_empty() || except.len() == positions.len());
         let n = positions.len();
         let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (lo, hi) = positions
@@ -144,7 +152,7 @@ impl Grid {
         };
         let radius = radius.max(1e-6);
         self.layout(lo, hi, self.capped(lo, hi, radius, n));
-        self.sort(positions);
+        self.sort(positions, except);
         // How crowded a typical agent's cell is: the agent-weighted mean occupancy.
         let crowd = self
             .starts
@@ -161,7 +169,7 @@ impl Grid {
             let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n);
             if cell < self.cell * 0.9 {
                 self.layout(lo, hi, cell);
-                self.sort(positions);
+                self.sort(positions, except);
             }
         }
     }
@@ -190,9 +198,10 @@ impl Grid {
         self.dims = ((extent / cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
     }
 
-    /// Counting sort of the agents by cell.
-    fn sort(&mut self, positions: &[Vec3]) {
-        let n = positions.len();
+    /// Counting sort of the agents by cell, leaving out those flagged in `except`.
+    fn sort(&mut self, positions: &[Vec3], except: &[bool]) {
+        let out = |i: usize| except.get(i).copied().unwrap_or(false);
+        let n = positions.len() - (0..except.len()).filter(|&i| except[i]).count();
         let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let mut cells = std::mem::take(&mut self.cells);
         cells.clear();
@@ -203,8 +212,10 @@ impl Grid {
         );
         self.starts.clear();
         self.starts.resize(total + 1, 0);
-        for &c in &cells {
-            self.starts[c as usize + 1] += 1;
+        for (i, &c) in cells.iter().enumerate() {
+            if !out(i) {
+                self.starts[c as usize + 1] += 1;
+            }
         }
         for i in 0..total {
             self.starts[i + 1] += self.starts[i];
@@ -212,8 +223,10 @@ impl Grid {
         self.items.resize(n, 0);
         let mut fill = self.starts[..total].to_vec();
         for (i, &c) in cells.iter().enumerate() {
-            self.items[fill[c as usize] as usize] = i as u32;
-            fill[c as usize] += 1;
+            if !out(i) {
+                self.items[fill[c as usize] as usize] = i as u32;
+                fill[c as usize] += 1;
+            }
         }
         self.cells = cells;
         let items = &self.items;
