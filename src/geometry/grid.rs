@@ -510,6 +510,33 @@ mod tests {
     }
 
     #[test]
+    fn points_left_out_are_never_found_and_the_rest_are() {
+        // Every third point left out (bees inside their hive): the answer is brute force's
+        // over the others, in a sparse cloud and in a crowd.
+        for (seed, n, size) in [(5, 2000, 1.0), (6, 6000, 0.1)] {
+            let pts = cloud(seed, n, size);
+            let except: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
+            let mut g = Grid::default();
+            g.build_except(&pts, 0.2, &except);
+            let mut out = [0u32; MAX_K];
+            for i in (0..n).step_by(11) {
+                let len = g.nearest(pts[i], 0.2, 16, i, &mut out);
+                let mut found: Vec<usize> = out[..len].iter().map(|&j| j as usize).collect();
+                found.sort_unstable();
+                let mut brute: Vec<(f32, usize)> = (0..n)
+                    .filter(|&j| j != i && !except[j])
+                    .map(|j| (pts[i].distance_squared(pts[j]), j))
+                    .filter(|&(d2, _)| d2 < 0.04)
+                    .collect();
+                brute.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut want: Vec<usize> = brute.iter().take(16).map(|&(_, j)| j).collect();
+                want.sort_unstable();
+                assert_eq!(found, want, "point {i}");
+            }
+        }
+    }
+
+    #[test]
     fn a_crowd_shrinks_the_cells_and_keeps_the_answer() {
         // 20,000 points in a 20 cm cube (2.5 million per m³) and a sparse halo.
         let mut pts = cloud(3, 20_000, 0.1);
