@@ -200,8 +200,10 @@ impl Grid {
 
     /// Counting sort of the agents by cell, leaving out those flagged in `except`.
     fn sort(&mut self, positions: &[Vec3], except: &[bool]) {
-        let out = |i: usize| except.get(i).copied().unwrap_or(false);
-        let n = positions.len() - (0..except.len()).filter(|&i| except[i]).count();
+        // `except` is empty in shots without hidden agents: one test, hoisted out of the loops.
+        let some = !except.is_empty();
+        let out = |i: usize| some && except[i];
+        let n = positions.len() - except.iter().filter(|&&x| x).count();
         let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let mut cells = std::mem::take(&mut self.cells);
         cells.clear();

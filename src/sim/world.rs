@@ -628,8 +628,14 @@ impl Simulation {
             self.positions.clear();
             self.positions
                 .par_extend(self.agents.par_iter().map(|a| a.pos));
+            // (A shot without a hive skips the flags: the common case costs nothing.)
+            let except: &[bool] = if self.hidden.contains(&true) {
+                &self.hidden
+            } else {
+                &[]
+            };
             self.grid
-                .build_except(&self.positions, self.grid_cell, &self.hidden);
+                .build_except(&self.positions, self.grid_cell, except);
         }
 
         // Pass 1: neighbour lists and the models' gather passes, written in place.

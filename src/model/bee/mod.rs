@@ -258,11 +258,12 @@ impl Model for BeeModel {
     }
 
     fn step(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
-        if b.state == LANDED {
-            return self.perched(cx, i, b);
-        }
-        if b.state == INSIDE {
-            return self.inside(cx, i, b);
+        if b.state >= LANDED {
+            return if b.state == LANDED {
+                self.perched(cx, i, b)
+            } else {
+                self.inside(cx, i, b)
+            };
         }
         let c = &b.c;
         let ri = self.flight.body_radius(c.size);
