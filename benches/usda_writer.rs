@@ -73,6 +73,7 @@ fn main() {
             channels: beeswarm::species::BEE_CHANNELS.to_vec(),
             body_length_m: 0.012,
             wing_beat_hz: 230.0,
+            hidden: None,
         }],
     };
     let dir = std::path::Path::new(out);

@@ -21,7 +21,8 @@ def shown(bee_id, percent):
 
 def _display_group():
     """Viewport-only Geometry Nodes: deletes a random share of the instances, chosen by their
-    `id` (Random Value's ID input is the `id` attribute when present), so the same bees stay."""
+    `id` (Random Value's ID input is the `id` attribute when present), so the same bees stay;
+    with Points in Viewport, the points of hidden bees (inside a hive) too."""
     # One per instancer, not shared: each import's data-blocks go with that import.
     ng = bpy.data.node_groups.new(DISPLAY_MODIFIER, "GeometryNodeTree")
     ng.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
@@ -42,11 +43,25 @@ def _display_group():
     parts = ng.nodes.new("GeometryNodeSeparateComponents")
     join = ng.nodes.new("GeometryNodeJoinGeometry")
     ng.links.new(gin.outputs["Geometry"], parts.inputs[0])
-    for component, domain in (("Instances", "INSTANCE"), ("Point Cloud", "POINT")):
+    # The points also lose those the instancer's mask hides (bees inside a hive: USD
+    # invisibleIds, which Blender's importer reads into a `mask` point attribute and the
+    # instancing skips): hidden = the attribute exists and is false.
+    mask = ng.nodes.new("GeometryNodeInputNamedAttribute")
+    mask.data_type = "BOOLEAN"
+    mask.inputs["Name"].default_value = "mask"
+    hidden = ng.nodes.new("FunctionNodeBooleanMath")
+    hidden.operation = "NIMPLY"  # A and not B
+    ng.links.new(mask.outputs["Exists"], hidden.inputs[0])
+    ng.links.new(mask.outputs["Attribute"], hidden.inputs[1])
+    either = ng.nodes.new("FunctionNodeBooleanMath")
+    either.operation = "OR"
+    ng.links.new(invert.outputs[0], either.inputs[0])
+    ng.links.new(hidden.outputs[0], either.inputs[1])
+    for component, domain, drop in (("Instances", "INSTANCE", invert), ("Point Cloud", "POINT", either)):
         delete = ng.nodes.new("GeometryNodeDeleteGeometry")
         delete.domain = domain
         ng.links.new(parts.outputs[component], delete.inputs["Geometry"])
-        ng.links.new(invert.outputs[0], delete.inputs["Selection"])
+        ng.links.new(drop.outputs[0], delete.inputs["Selection"])
         ng.links.new(delete.outputs["Geometry"], join.inputs[0])
     ng.links.new(join.outputs[0], gout.inputs["Geometry"])
     return ng

@@ -533,6 +533,74 @@ fn landing_keys_belong_to_nests_and_flowers() {
 }
 
 #[test]
+fn hive_keys_belong_to_nests_with_landing_and_bee_swarms() {
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"flower\"\nposition = [0, 1, 0]\nland = true\ninside = [5, 10]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:7:10:",
+            "key `target[0].inside`",
+            "bees cannot go inside a flower",
+            "hint: `inside` is for a nest (a hive entrance) with `land = true`",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"nest\"\nposition = [0, 1, 0]\ninside = [5, 10]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:6:10:",
+            "key `target[0].inside`",
+            "this nest has no `land = true`",
+            "hint: add `land = true`",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\n[[target]]\ntype = \"nest\"\nposition = [0, 1, 0]\nland = true\ninside = [10, -1]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:7:10:",
+            "key `target[0].inside`",
+            "expected [min, max] seconds with 0 <= min <= max <= 3600, found [10.0, -1.0]",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nstart_inside = 1.5\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:16:",
+            "key `swarm[0].start_inside`",
+            "expected a fraction of the swarm from 0 to 1, found 1.5",
+        ],
+    );
+    let err = refuse("[[swarm]]\ncount = 3\nstart_inside = 0.5\n");
+    assert_says(
+        &err,
+        &[
+            "shot.toml:3:16:",
+            "key `swarm[0].start_inside`",
+            "no nest with `inside` attracts this swarm",
+        ],
+    );
+    let err = refuse(
+        "[[swarm]]\ncount = 3\nmodel = \"boids\"\nstart_inside = 0.5\n[[target]]\ntype = \"nest\"\nposition = [0, 1, 0]\nland = true\ninside = [5, 10]\n",
+    );
+    assert_says(
+        &err,
+        &[
+            "shot.toml:4:16:",
+            "key `swarm[0].start_inside`",
+            "only bees go inside a hive, and this swarm flies with the `boids` model",
+        ],
+    );
+}
+
+#[test]
 fn preset_files_missing_or_bad() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();

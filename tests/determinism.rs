@@ -5,7 +5,8 @@
 //! enforcement) and a dense zonal swarm (paper 002: ORCA, escape angles drawn per agent)
 //! meeting a predator, and paper 004's butterflies chasing each other in the rain. A mesh
 //! obstacle among the bees covers the mesh queries' per-thread memo and search bounds,
-//! which must not change an answer.
+//! which must not change an answer. The nest is a hive that a fifth of the bees start
+//! inside (hive traffic: bees out of the neighbour grid, coming out and going in).
 
 mod common;
 
@@ -23,6 +24,7 @@ name = "bees"
 count = 300
 preset = "nest"
 spawn = { shape = "box", center = [0, 1, 0.5], size = [1, 0.5, 0.5] }
+start_inside = 0.2
 [[swarm]]
 name = "boids"
 count = 60
@@ -71,6 +73,9 @@ height = 2
 type = "nest"
 position = [0, 1, 0]
 swarms = ["bees", "boids", "field", "butterflies"]
+land = true
+stay = [0.05, 0.2]
+inside = [0.1, 0.5]
 [[obstacle]]
 type = "mesh"
 file = "ball.obj"

@@ -9,7 +9,8 @@ use std::process::{Command, Stdio};
 /// Seven models (a bee swarm with its channels, a boids flock, Brownian flyers whose
 /// random kicks depend on the step count, paper 001's field insects, paper 002's zonal
 /// insects escaping a predator, paper 003's fastswarm insects, paper 004's butterflies in
-/// the rain, mid-window of Eq. 12), obstacles and targets.
+/// the rain, mid-window of Eq. 12), obstacles and targets, among them a hive that 30 bees
+/// start inside and leave around the checkpoint (the state of the hive traffic is in it).
 const SHOT: &str = r#"
 [scene]
 name = "resume"
@@ -20,6 +21,7 @@ name = "bees"
 count = 150
 preset = "grassland"
 spawn = { shape = "box", center = [0.0, 1.1, 0.0], size = [2.0, 1.0, 2.0] }
+start_inside = 0.2
 [[swarm]]
 name = "flock"
 model = "boids"
@@ -66,6 +68,14 @@ normal = [0.0, 1.0, 0.0]
 type = "flower"
 name = "clover"
 position = [0.5, 0.4, 0.5]
+[[target]]
+type = "nest"
+name = "hive"
+position = [-0.5, 0.6, 0.5]
+land = true
+stay = [0.05, 0.2]
+inside = [0.2, 0.6]
+swarms = ["bees"]
 [output]
 formats = ["glb", "usda", "csv"]
 preview = true

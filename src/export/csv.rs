@@ -141,6 +141,7 @@ mod tests {
             channels,
             body_length_m: 0.012,
             wing_beat_hz: 230.0,
+            hidden: None,
         }
     }
 

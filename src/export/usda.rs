@@ -9,7 +9,8 @@
 //!                                  velocities (m/s), angularVelocities (deg/s), extent,
 //!                                  and one primvars:<channel> per channel the model
 //!                                  records ("vertex": per instance; a honeybee: pitch,
-//!                                  roll, sway)
+//!                                  roll, sway, state); a swarm that hides agents (bees
+//!                                  inside their hive) also time-samples invisibleIds
 //!         /Prototypes/<species>    Scope / Xform (e.g. Prototypes/honeybee; a flapping
 //!                                  bee: honeybee_0..7 per phase group; a butterfly:
 //!                                  butterfly_0..18 with the wings at -90°..90° of flap,
@@ -67,6 +68,9 @@ enum Attr {
     ProtoIndices(usize),
     /// `primvars:<name>` of the swarm's channel with this index.
     Primvar(usize),
+    /// `invisibleIds`: the ids of the instances hidden at the frame (`SwarmMeta::hidden`),
+    /// for a swarm that hides any.
+    InvisibleIds,
 }
 
 /// `scales` is not among them: an instance's scale is constant through a shot (the frame
@@ -85,6 +89,7 @@ fn attrs(m: &SwarmMeta) -> impl Iterator<Item = Attr> + '_ {
         .into_iter()
         .chain(flap_column(m).map(Attr::ProtoIndices))
         .chain((0..m.channels.len()).map(Attr::Primvar))
+        .chain(m.hidden.map(|_| Attr::InvisibleIds))
 }
 
 /// The channel column of a swarm whose wings are drawn by flap bins: its species turns
@@ -120,6 +125,7 @@ impl Attr {
             Attr::Extent => "float3[] extent".into(),
             Attr::ProtoIndices(_) => "int[] protoIndices".into(),
             Attr::Primvar(c) => format!("float[] primvars:{}", m.channels[c].name),
+            Attr::InvisibleIds => "int64[] invisibleIds".into(),
         }
     }
 
@@ -144,7 +150,7 @@ impl Attr {
                 3 * 16 + 6
             }
             Attr::Orientations => 4 * 11 + 8,
-            Attr::Extent => 0,
+            Attr::Extent | Attr::InvisibleIds => 0,
             Attr::ProtoIndices(_) => 4,
             Attr::Primvar(_) => 16 + 2,
         }
@@ -165,7 +171,13 @@ struct Piece {
 }
 
 impl Piece {
-    fn format(&mut self, s: &SwarmFrame, radius: f32, half: HalfFormatter) {
+    fn format(
+        &mut self,
+        s: &SwarmFrame,
+        radius: f32,
+        half: HalfFormatter,
+        hidden: Option<(usize, f32)>,
+    ) {
         let out = &mut self.text;
         out.clear();
         self.bad = None;
@@ -242,6 +254,18 @@ impl Piece {
                 bad
             }
             Attr::Primvar(c) => floats(out, &s.channels[c][r.clone()]),
+            Attr::InvisibleIds => {
+                // One piece over the whole swarm (like the extent): the list is sparse.
+                let mut ib = itoa::Buffer::new();
+                for i in r.clone().filter(|&i| s.is_hidden(hidden, i)) {
+                    if !out.is_empty() {
+                        out.extend_from_slice(b", ");
+                    }
+                    // Shot ids fit int64 (see `write_static`).
+                    out.extend_from_slice(ib.format(s.ids[i] as i64).as_bytes());
+                }
+                None
+            }
             Attr::ProtoIndices(c) => {
                 let mut ib = itoa::Buffer::new();
                 let mut bad = None;
@@ -529,7 +553,8 @@ impl UsdaWriter {
     fn plan_pieces(&mut self) {
         for (k, m) in self.meta.swarms.iter().enumerate() {
             for attr in attrs(m) {
-                let ranges: Vec<(usize, usize)> = if attr == Attr::Extent || m.count == 0 {
+                let whole = matches!(attr, Attr::Extent | Attr::InvisibleIds);
+                let ranges: Vec<(usize, usize)> = if whole || m.count == 0 {
                     vec![(0, m.count)]
                 } else {
                     (0..m.count)
@@ -733,7 +758,7 @@ impl UsdaWriter {
             scale: self.scales[swarm].clone(),
             ..SwarmFrame::default()
         };
-        scales.format(&frame, 0.0, self.half);
+        scales.format(&frame, 0.0, self.half, None);
         if scales.bad.is_some() {
             return Err(Error::bake(format!(
                 "USDA writer: swarm \"{}\" has a scale that is not finite",
@@ -1611,10 +1636,15 @@ impl CacheWriter for UsdaWriter {
         if self.pieces.is_empty() {
             self.plan_pieces();
         }
-        let (radius, half) = (&self.radius, self.half);
-        self.pieces
-            .par_iter_mut()
-            .for_each(|p| p.format(&frame.swarms[p.swarm], radius[p.swarm], half));
+        let (radius, half, swarms) = (&self.radius, self.half, &self.meta.swarms);
+        self.pieces.par_iter_mut().for_each(|p| {
+            p.format(
+                &frame.swarms[p.swarm],
+                radius[p.swarm],
+                half,
+                swarms[p.swarm].hidden,
+            )
+        });
         if let Some(p) = self.pieces.iter().find(|p| p.bad.is_some()) {
             let i = p.bad.expect("found a bad piece");
             return Err(Error::bake(format!(
@@ -1697,6 +1727,7 @@ mod tests {
                     channels: crate::species::BEE_CHANNELS.to_vec(),
                     body_length_m: 0.012,
                     wing_beat_hz: 230.0,
+                    hidden: None,
                 })
                 .collect(),
         }

@@ -131,6 +131,14 @@ impl Grid {
     /// when the swarm is spread so widely that the grid would need more than the cell
     /// budget (32 per agent, at most 2^25).
     pub fn build(&mut self, positions: &[Vec3], radius: f32) {
+        self.build_except(positions, radius, &[]);
+    }
+
+    /// As [`Grid::build`], leaving out every point `i` with `except[i]` (agents out of
+    /// the world, such as bees inside their hive): queries never return them. `except` is
+    /// empty (leave out none) or one flag per point.
+    pub fn build_except(&mut self, positions: &[Vec3], radius: f32, except: &[bool]) {
+        debug_assert!(except.is_empty() || except.len() == positions.len());
         let n = positions.len();
         let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (lo, hi) = positions
@@ -144,7 +152,7 @@ impl Grid {
         };
         let radius = radius.max(1e-6);
         self.layout(lo, hi, self.capped(lo, hi, radius, n));
-        self.sort(positions);
+        self.sort(positions, except);
         // How crowded a typical agent's cell is: the agent-weighted mean occupancy.
         let crowd = self
             .starts
@@ -161,7 +169,7 @@ impl Grid {
             let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n);
             if cell < self.cell * 0.9 {
                 self.layout(lo, hi, cell);
-                self.sort(positions);
+                self.sort(positions, except);
             }
         }
     }
@@ -190,9 +198,12 @@ impl Grid {
         self.dims = ((extent / cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
     }
 
-    /// Counting sort of the agents by cell.
-    fn sort(&mut self, positions: &[Vec3]) {
-        let n = positions.len();
+    /// Counting sort of the agents by cell, leaving out those flagged in `except`.
+    fn sort(&mut self, positions: &[Vec3], except: &[bool]) {
+        // `except` is empty in shots without hidden agents: one test, hoisted out of the loops.
+        let some = !except.is_empty();
+        let out = |i: usize| some && except[i];
+        let n = positions.len() - except.iter().filter(|&&x| x).count();
         let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let mut cells = std::mem::take(&mut self.cells);
         cells.clear();
@@ -203,8 +214,10 @@ impl Grid {
         );
         self.starts.clear();
         self.starts.resize(total + 1, 0);
-        for &c in &cells {
-            self.starts[c as usize + 1] += 1;
+        for (i, &c) in cells.iter().enumerate() {
+            if !out(i) {
+                self.starts[c as usize + 1] += 1;
+            }
         }
         for i in 0..total {
             self.starts[i + 1] += self.starts[i];
@@ -212,8 +225,10 @@ impl Grid {
         self.items.resize(n, 0);
         let mut fill = self.starts[..total].to_vec();
         for (i, &c) in cells.iter().enumerate() {
-            self.items[fill[c as usize] as usize] = i as u32;
-            fill[c as usize] += 1;
+            if !out(i) {
+                self.items[fill[c as usize] as usize] = i as u32;
+                fill[c as usize] += 1;
+            }
         }
         self.cells = cells;
         let items = &self.items;
@@ -494,6 +509,33 @@ mod tests {
         check(&pts, 0.1, 16);
         check(&pts, 0.3, 16);
         check(&pts, 0.3, 1);
+    }
+
+    #[test]
+    fn points_left_out_are_never_found_and_the_rest_are() {
+        // Every third point left out (bees inside their hive): the answer is brute force's
+        // over the others, in a sparse cloud and in a crowd.
+        for (seed, n, size) in [(5, 2000, 1.0), (6, 6000, 0.1)] {
+            let pts = cloud(seed, n, size);
+            let except: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
+            let mut g = Grid::default();
+            g.build_except(&pts, 0.2, &except);
+            let mut out = [0u32; MAX_K];
+            for i in (0..n).step_by(11) {
+                let len = g.nearest(pts[i], 0.2, 16, i, &mut out);
+                let mut found: Vec<usize> = out[..len].iter().map(|&j| j as usize).collect();
+                found.sort_unstable();
+                let mut brute: Vec<(f32, usize)> = (0..n)
+                    .filter(|&j| j != i && !except[j])
+                    .map(|j| (pts[i].distance_squared(pts[j]), j))
+                    .filter(|&(d2, _)| d2 < 0.04)
+                    .collect();
+                brute.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut want: Vec<usize> = brute.iter().take(16).map(|&(_, j)| j).collect();
+                want.sort_unstable();
+                assert_eq!(found, want, "point {i}");
+            }
+        }
     }
 
     #[test]

@@ -83,6 +83,8 @@ pub struct TargetNow {
     /// Bees land on it, and stay a time from this range, seconds (`Target::land`).
     pub land: bool,
     pub stay: (f32, f32),
+    /// A hive entrance: bees go in for a time from this range, seconds (`Target::inside`).
+    pub inside: Option<(f32, f32)>,
     /// Static virtual particles on the body (offsets from `center`), for models that
     /// feel them (paper 000 Sec. V-B); empty for targets without a body.
     pub particles: Vec<Vec3>,

@@ -169,6 +169,20 @@ pub struct Start {
     pub size: f32,
     /// Factor on the model's preferred speed (variation): 1 ± `variation.speed`.
     pub speed_factor: f32,
+    /// The agent starts inside a hive (the swarm's `start_inside`); `pos` is then on the
+    /// hive's entrance. Only bee swarms get one.
+    pub inside: Option<StartInside>,
+}
+
+/// Where an agent that starts inside a hive is.
+#[derive(Clone, Copy, Debug)]
+pub struct StartInside {
+    /// The hive's target index.
+    pub target: usize,
+    /// The agent's place on the entrance, from the target's centre, m.
+    pub offset: Vec3,
+    /// Seconds before it comes out.
+    pub time_left: f32,
 }
 
 /// What every agent state exposes to the world.
@@ -179,6 +193,11 @@ pub trait Agent: Copy + Send + Sync {
     fn size(&self) -> f32;
     /// Places the agent (tools and tests that need exact starting conditions).
     fn place(&mut self, position: Vec3, velocity: Vec3);
+    /// Whether the agent is out of the world for now (a bee inside its hive): it is no
+    /// other agent's neighbour, and the caches hide it (`Model::HIDDEN_STATE`).
+    fn hidden(&self) -> bool {
+        false
+    }
 }
 
 /// An agent's attitude for the caches.
@@ -199,6 +218,10 @@ pub trait Model: Sized + Send + Sync {
     const INFO: ModelInfo;
     /// Whether the model has a gather pass (paper 000's SPH density) before the step.
     const GATHERS: bool = false;
+    /// The channel and value that mark an agent hidden at a frame in the recording (a bee
+    /// inside its hive: `state` 3), so that the writers can hide it; the same agents as
+    /// `Agent::hidden`. `None`: the model never hides one.
+    const HIDDEN_STATE: Option<(&'static str, f32)> = None;
 
     fn new(setup: &SwarmSetup) -> Self;
 

@@ -74,6 +74,9 @@ pub struct Swarm {
     /// FASTSWARM's velocity database from the shot's `database` file; `None`: the
     /// shipped one.
     pub database: Option<std::sync::Arc<crate::model::fastswarm::database::Database>>,
+    /// Fraction of the bees (the first ones, by id) that start inside the hives of the
+    /// targets that attract the swarm (`Target::inside`), 0 to 1; bee model only.
+    pub start_inside: f32,
 }
 
 /// A volume bees are spawned in.
@@ -126,6 +129,11 @@ pub struct Target {
     /// uniformly from `stay` (seconds, min ≤ max) before taking off again.
     pub land: bool,
     pub stay: (f32, f32),
+    /// A hive entrance (a nest with `land = true` and `inside`): a bee that has stayed its
+    /// `stay` on it goes inside for a time drawn uniformly from this range (seconds),
+    /// hidden, then comes out onto the entrance, stays again and takes off. `None`: bees
+    /// only land on it.
+    pub inside: Option<(f32, f32)>,
 }
 
 impl Target {

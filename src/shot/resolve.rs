@@ -114,6 +114,21 @@ impl Ctx<'_> {
         }
     }
 
+    /// A range of seconds `[min, max]`, 0 ≤ min ≤ max ≤ 3600 (how long bees stay).
+    fn seconds_range(&self, path: &str, v: &[f64]) -> Result<(f64, f64), ShotError> {
+        match v {
+            [lo, hi]
+                if lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo <= hi && *hi <= 3600.0 =>
+            {
+                Ok((*lo, *hi))
+            }
+            _ => Err(self.err(
+                path,
+                format!("expected [min, max] seconds with 0 <= min <= max <= 3600, found {v:?}"),
+            )),
+        }
+    }
+
     fn non_negative(&self, path: &str, v: f64) -> Result<f64, ShotError> {
         self.range(path, v, 0.0, f64::MAX, "a number of at least 0")
     }
@@ -453,6 +468,7 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
             targets.push(resolve_target(&cx, i, rt, &swarms)?);
         }
     }
+    resolve_start_inside(&cx, &raw.swarm, &mut swarms, &targets)?;
     let wind = match raw.wind.as_ref().and_then(|w| w.velocity) {
         Some(v) => cx.vec_in("wind.velocity", v, "m/s")?,
         None => Vec3::ZERO,
@@ -890,6 +906,7 @@ fn resolve_swarm(
         bee,
         bounds,
         database,
+        start_inside: 0.0,
     })
 }
 
@@ -1421,21 +1438,25 @@ fn resolve_target(
                 "add `land = true` to let bees land on it",
             ));
         }
-        Some(v) => match v.as_slice() {
-            [lo, hi]
-                if lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo <= hi && *hi <= 3600.0 =>
-            {
-                (*lo, *hi)
-            }
-            _ => {
-                return Err(cx.err(
-                    &k("stay"),
-                    format!(
-                        "expected [min, max] seconds with 0 <= min <= max <= 3600, found {v:?}"
-                    ),
-                ));
-            }
-        },
+        Some(v) => cx.seconds_range(&k("stay"), v)?,
+    };
+    let inside = match &rt.inside {
+        None => None,
+        Some(_) if kind != TargetKind::Nest => {
+            return Err(cx.hint(
+                &k("inside"),
+                format!("bees cannot go inside {}", with_article(&kind_name)),
+                "`inside` is for a nest (a hive entrance) with `land = true`",
+            ));
+        }
+        Some(_) if !land => {
+            return Err(cx.hint(
+                &k("inside"),
+                "`inside` is how long bees stay in the hive after landing at its entrance, and this nest has no `land = true`",
+                "add `land = true` to let bees land on it and go in",
+            ));
+        }
+        Some(v) => Some(cx.seconds_range(&k("inside"), v)?),
     };
     Ok(Target {
         name,
@@ -1448,7 +1469,45 @@ fn resolve_target(
         swarms: swarm_ids,
         land,
         stay: (stay.0 as f32, stay.1 as f32),
+        inside: inside.map(|(a, b)| (a as f32, b as f32)),
     })
+}
+
+/// Each swarm's `start_inside`: a fraction from 0 to 1, for a `bee` swarm that a hive (a
+/// nest with `inside`) attracts. Read once the targets are known.
+fn resolve_start_inside(
+    cx: &Ctx,
+    raw: &[RawSwarm],
+    swarms: &mut [Swarm],
+    targets: &[Target],
+) -> Result<(), ShotError> {
+    for (i, (rs, s)) in raw.iter().zip(swarms.iter_mut()).enumerate() {
+        let Some(v) = rs.start_inside else { continue };
+        let key = format!("swarm[{i}].start_inside");
+        let f = cx.range(&key, v, 0.0, 1.0, "a fraction of the swarm from 0 to 1")?;
+        if f > 0.0 && s.model != ModelKind::Bee {
+            return Err(cx.hint(
+                &key,
+                format!(
+                    "only bees go inside a hive, and this swarm flies with the `{}` model",
+                    s.model.name()
+                ),
+                "remove `start_inside`, or use model = \"bee\"",
+            ));
+        }
+        let hive = targets
+            .iter()
+            .any(|t| t.inside.is_some() && t.swarms.contains(&i));
+        if f > 0.0 && !hive {
+            return Err(cx.hint(
+                &key,
+                "no hive to start inside: no nest with `inside` attracts this swarm",
+                "give a nest `land = true` and `inside = [min, max]` seconds",
+            ));
+        }
+        s.start_inside = f as f32;
+    }
+    Ok(())
 }
 
 /// "an attractor", "a nest".

@@ -51,6 +51,8 @@ pub struct RawSwarm {
     pub params: Option<RawParams>,
     /// FASTSWARM: the velocity database file (relative to the shot).
     pub database: Option<String>,
+    /// Fraction of the swarm's bees that start inside a hive (a nest with `inside`).
+    pub start_inside: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]
@@ -133,6 +135,7 @@ pub struct RawTarget {
     pub samples: Option<i64>,
     pub land: Option<bool>,
     pub stay: Option<Vec<f64>>,
+    pub inside: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

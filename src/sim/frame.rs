@@ -43,6 +43,11 @@ impl SwarmFrame {
         self.ids.is_empty()
     }
 
+    /// Whether agent `i` is hidden at this frame, by its swarm's `SwarmMeta::hidden`.
+    pub fn is_hidden(&self, rule: Option<(usize, f32)>, i: usize) -> bool {
+        rule.is_some_and(|(c, v)| self.channels[c][i] == v)
+    }
+
     /// Agent `i`'s value of channel column `column` (`None`: 0), e.g. the lateral offset.
     pub fn channel_or_zero(&self, column: Option<usize>, i: usize) -> f32 {
         column.map_or(0.0, |c| self.channels[c][i])
@@ -94,6 +99,10 @@ pub struct SwarmMeta {
     pub body_length_m: f32,
     /// Wing beat frequency of the real insect, Hz (a honeybee: about 230).
     pub wing_beat_hz: f32,
+    /// Agents hidden from view at a frame (bees inside their hive) are those whose channel
+    /// column `.0` holds `.1` then. `None`: the swarm never hides one, and its caches carry
+    /// no visibility data (a bee swarm without a hive).
+    pub hidden: Option<(usize, f32)>,
 }
 
 impl SwarmMeta {

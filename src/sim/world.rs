@@ -11,7 +11,7 @@ use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
 use crate::model::context::NeighbourList;
 use crate::model::{
-    Agent, Context, Model, Neighbour, Pose, Start, SwarmSetup, TargetNow, with_model,
+    Agent, Context, Model, Neighbour, Pose, Start, StartInside, SwarmSetup, TargetNow, with_model,
 };
 use crate::shot::{Region, Shot};
 use glam::Vec3;
@@ -47,8 +47,9 @@ struct Gather<'a> {
 /// What the world does with a swarm, whatever its model: one call per swarm per pass.
 trait Swarm: Send + Sync {
     fn len(&self) -> usize;
-    /// Writes the agents' neighbour records (pass 0).
-    fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32);
+    /// Writes the agents' neighbour records, and which agents are out of the world for
+    /// now (`Agent::hidden`: no one's neighbour) (pass 0).
+    fn neighbour_records(&self, out: &mut [Neighbour], hidden: &mut [bool], mass: f32, radius: f32);
     /// Lists each agent's neighbours and runs the model's gather pass (pass 1).
     fn gather(&self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]);
     /// Steps every agent into the second buffer and swaps (pass 2).
@@ -73,7 +74,18 @@ where
         self.agents.len()
     }
 
-    fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32) {
+    fn neighbour_records(
+        &self,
+        out: &mut [Neighbour],
+        hidden: &mut [bool],
+        mass: f32,
+        radius: f32,
+    ) {
+        hidden
+            .par_iter_mut()
+            .zip(self.agents.par_iter())
+            .with_min_len(4096)
+            .for_each(|(h, a)| *h = a.hidden());
         out.par_iter_mut()
             .zip(self.agents.par_iter())
             .with_min_len(1024)
@@ -238,6 +250,8 @@ pub struct Simulation {
     lists: Vec<NeighbourList>,
     gathered: Vec<(f32, f32)>,
     agents: Vec<Neighbour>,
+    /// Per agent: out of the world this substep (`Agent::hidden`), left out of the grid.
+    hidden: Vec<bool>,
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
@@ -309,13 +323,66 @@ fn start(shot: &Shot, obstacles: &[Shape], si: usize, k: usize) -> (Start, Rng) 
         ),
         Vec3::X,
     );
+    let inside = starts_inside(shot, obstacles, si, k, r, &mut rng);
     let start = Start {
-        pos,
+        pos: inside.map_or(pos, |h| {
+            shot.targets[h.target].position_at(shot.frame_start as f64) + h.offset
+        }),
         dir,
         size,
         speed_factor,
+        inside,
     };
     (start, rng)
+}
+
+/// Agent k of swarm `si` (body radius `r`) starts inside a hive if it is among the
+/// swarm's first `start_inside` fraction: the hives that attract the swarm take them in
+/// turn. It sits on the entrance (a random point of the target's sphere, moved clear of
+/// `obstacles`), and comes out after a time drawn uniformly from 0 to the hive's longest
+/// stay inside, so that bees come out from the first frame on.
+fn starts_inside(
+    shot: &Shot,
+    obstacles: &[Shape],
+    si: usize,
+    k: usize,
+    r: f32,
+    rng: &mut Rng,
+) -> Option<StartInside> {
+    let s = &shot.swarms[si];
+    let n = (s.start_inside as f64 * s.count as f64).round() as usize;
+    if k >= n {
+        return None;
+    }
+    let hives: Vec<usize> = (0..shot.targets.len())
+        .filter(|&ti| shot.targets[ti].inside.is_some() && shot.targets[ti].swarms.contains(&si))
+        .collect();
+    let target = *hives.get(k % hives.len().max(1))?;
+    let t = &shot.targets[target];
+    let center = t.position_at(shot.frame_start as f64);
+    let dir = loop {
+        let v = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        if (0.01..=1.0).contains(&v.length_squared()) {
+            break v.normalize();
+        }
+    };
+    let mut pos = center + dir * (t.radius + r);
+    for o in obstacles {
+        let q = geometry::query(o, pos);
+        if q.distance < r {
+            pos = q.point + q.normal * (r + 1e-3);
+        }
+    }
+    let longest = t.inside.map_or(0.0, |(_, hi)| hi);
+    Some(StartInside {
+        target,
+        offset: pos - center,
+        time_left: longest * rng.f32(),
+    })
 }
 
 impl Simulation {
@@ -379,6 +446,7 @@ impl Simulation {
                 radius: t.radius,
                 land: t.land,
                 stay: t.stay,
+                inside: t.inside,
                 particles: if t.kind.has_body() && spacing.is_finite() {
                     geometry::sphere_samples(Vec3::ZERO, t.radius, spacing.max(t.radius * 0.3))
                 } else {
@@ -404,6 +472,7 @@ impl Simulation {
             lists: Vec::new(),
             gathered: Vec::new(),
             agents: Vec::new(),
+            hidden: Vec::new(),
             positions: Vec::new(),
             grid: Grid::default(),
             grid_cell,
@@ -466,8 +535,20 @@ impl Simulation {
                 .shot
                 .swarms
                 .iter()
-                .map(|s| {
+                .enumerate()
+                .map(|(si, s)| {
                     let info = s.model.info();
+                    // Agents are hidden only in swarms that a hive attracts.
+                    let hive = self
+                        .shot
+                        .targets
+                        .iter()
+                        .any(|t| t.inside.is_some() && t.swarms.contains(&si));
+                    let rule = with_model!(s.model, M => M::HIDDEN_STATE);
+                    let hidden = rule.filter(|_| hive).and_then(|(name, value)| {
+                        let column = info.channels.iter().position(|c| c.name == name)?;
+                        Some((column, value))
+                    });
                     SwarmMeta {
                         name: s.name.clone(),
                         count: s.count,
@@ -475,6 +556,7 @@ impl Simulation {
                         channels: info.channels.to_vec(),
                         body_length_m: s.bee.length,
                         wing_beat_hz: s.bee.wing_beat_hz,
+                        hidden,
                     }
                 })
                 .collect(),
@@ -529,19 +611,31 @@ impl Simulation {
         self.update_targets(t);
         // Pass 0: every agent's neighbour record, and the grid over their positions.
         self.agents.resize(n, Neighbour::default());
-        for (s, (swarm, rest)) in self.shot.swarms.iter().zip(
-            self.swarms
-                .iter()
-                .zip(split(&mut self.agents, &self.swarms)),
-        ) {
-            swarm.neighbour_records(rest, s.bee.mass, s.bee.radius);
+        self.hidden.resize(n, false);
+        let per_swarm =
+            split(&mut self.agents, &self.swarms).zip(split(&mut self.hidden, &self.swarms));
+        for (s, (swarm, (rest, hidden))) in self
+            .shot
+            .swarms
+            .iter()
+            .zip(self.swarms.iter().zip(per_swarm))
+        {
+            swarm.neighbour_records(rest, hidden, s.bee.mass, s.bee.radius);
         }
-        // The grid only for shots where some model reads neighbours.
+        // The grid only for shots where some model reads neighbours; hidden agents (bees
+        // inside their hive) are not in it, so no one meets them.
         if self.swarms.iter().any(|s| s.lists_neighbours()) {
             self.positions.clear();
             self.positions
                 .par_extend(self.agents.par_iter().map(|a| a.pos));
-            self.grid.build(&self.positions, self.grid_cell);
+            // (A shot without a hive skips the flags: the common case costs nothing.)
+            let except: &[bool] = if self.hidden.contains(&true) {
+                &self.hidden
+            } else {
+                &[]
+            };
+            self.grid
+                .build_except(&self.positions, self.grid_cell, except);
         }
 
         // Pass 1: neighbour lists and the models' gather passes, written in place.

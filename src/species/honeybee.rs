@@ -33,7 +33,7 @@ pub const BEE_CHANNELS: [Channel; 4] = [
     Channel {
         name: "state",
         unit: "1",
-        doc: "0 flying, 1 hovering (slower than 0.1 m/s), 2 landed on a target with `land = true`.",
+        doc: "0 flying, 1 hovering (slower than 0.1 m/s), 2 landed on a target with `land = true`, 3 inside a hive (hidden).",
     },
 ];
 

@@ -666,6 +666,29 @@ def test_display_percentage_in_the_viewport_only(scene, beeswarm_bin):
     assert 0 < len(hidden) < len(bodies) and not any(o.hide_render for o in bodies.values())
 
 
+def test_points_in_viewport_leave_out_the_bees_inside_a_hive(scene, beeswarm_bin, tmp_path):
+    """A USD hive cache (examples/hive_traffic.toml): Blender's instancing skips the bees
+    inside (invisibleIds → its `mask` attribute), and so do the viewport's points."""
+    subprocess.run([beeswarm_bin, "bake", str(ROOT / "examples" / "hive_traffic.toml"), "--out",
+                    str(tmp_path), "--format", "usda,csv", "--frames", "1:48", "--progress", "none"],
+                   check=True, capture_output=True)
+    importer.import_cache(bpy.context, "hive_traffic", str(tmp_path / "hive_traffic.usda"), "USD",
+                          24, (1, 48))
+    inst = usd_instancer("hive_traffic")
+    display.apply(scene, [inst])
+    tracks = read_tracks(tmp_path / "hive_traffic.tracks.csv")
+    outside = {f: sum(1 for rows in tracks.values() if rows[f]["state"] != 3.0) for f in (1, 24, 48)}
+    assert len(set(outside.values())) > 1 and max(outside.values()) < len(tracks)
+    for f, n in outside.items():
+        assert len(drawn_instances(inst, f)) == n, f"frame {f}"
+    scene.beeswarm.viewport_points = True
+    for f, n in outside.items():
+        scene.frame_set(f)
+        dg = bpy.context.evaluated_depsgraph_get()
+        assert len(inst.evaluated_get(dg).data.points) == n, f"frame {f}"
+    scene.beeswarm.viewport_points = False
+
+
 def test_a_scene_object_as_the_insect_asset(scene, beeswarm_bin, tmp_path):
     """The asset (modelled facing +X, +Z up) is drawn on every bee, turned into the bee's
     body frame: its +X along the body's forward axis, its +Z along the body's up."""

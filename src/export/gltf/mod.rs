@@ -26,7 +26,11 @@
 //! grows with animated nodes, load fastest.
 //!
 //! Every track is LINEAR and keyed once per frame on one shared time accessor,
-//! `(frame − start) / fps` seconds. Wings are drawn as `export::wings` says, like USD.
+//! `(frame − start) / fps` seconds, but one: an agent that is hidden at some frames (a
+//! bee inside its hive, `SwarmMeta::hidden`) gets a STEP scale track on its agent node,
+//! 0 while hidden, so that it vanishes and reappears between two frames without
+//! shrinking. In the agent layout that track also carries the agent's own scale. Wings
+//! are drawn as `export::wings` says, like USD.
 //!
 //! Memory: the buffer wants each bee's history contiguous (node-major) but frames arrive
 //! one at a time (frame-major). Each frame's keys are appended to a scratch file as they
@@ -58,10 +62,11 @@ pub enum Container {
 }
 
 /// Floats spilled per agent per frame: agent translation (3), agent rotation (4), lateral
-/// offset (1), body rotation (4), scale (1). Stored little-endian, exactly the bytes the
+/// offset (1), body rotation (4), scale (1), shown (1: visible, 0: hidden). Stored
+/// little-endian, exactly the bytes the
 /// buffer holds. Then one channel value per channel-driven part (as many as the species
 /// of the shot with the most), turned into rotations at `finish`.
-const RECORD_FLOATS: usize = 13;
+const RECORD_FLOATS: usize = 14;
 const RECORD_BYTES: usize = RECORD_FLOATS * 4;
 /// Upper bound of the transpose block at `finish`.
 const TRANSPOSE_BUDGET_BYTES: usize = 16 << 20;
@@ -132,6 +137,8 @@ struct BeeState {
     prev_body_r: Quat,
     /// Scale is nominally constant per bee; a scale track is written only if it is not.
     scale_varies: bool,
+    /// Hidden at some frame: the agent node gets a STEP scale track (see the module notes).
+    hides: bool,
     swarm: usize,
 }
 
@@ -333,9 +340,11 @@ impl CacheWriter for GltfWriter {
                         same_hemisphere(st.prev_body_r, body_r),
                     )
                 };
+                let hidden = s.is_hidden(self.meta.swarms[si].hidden, i);
+                let shown = if hidden { 0.0 } else { 1.0 };
                 let rec: [f32; RECORD_FLOATS] = [
                     bee_t.x, bee_t.y, bee_t.z, bee_r.x, bee_r.y, bee_r.z, bee_r.w, lateral,
-                    body_r.x, body_r.y, body_r.z, body_r.w, scale,
+                    body_r.x, body_r.y, body_r.z, body_r.w, scale, shown,
                 ];
                 let at = self.record.len();
                 for v in rec.into_iter().chain(driven.clone()) {
@@ -349,6 +358,7 @@ impl CacheWriter for GltfWriter {
                         prev_bee_r: bee_r,
                         prev_body_r: body_r,
                         scale_varies: false,
+                        hides: hidden,
                         swarm: si,
                     });
                 } else {
@@ -356,6 +366,7 @@ impl CacheWriter for GltfWriter {
                     st.prev_bee_r = bee_r;
                     st.prev_body_r = body_r;
                     st.scale_varies |= scale != st.first[12];
+                    st.hides |= hidden;
                 }
                 bee += 1;
             }
@@ -432,14 +443,25 @@ struct Layout {
 
 /// Bytes of one agent's tracks: agent T, agent R, then (parts layout) body T and body R,
 /// then S if it varies (body S, or the agent's in the agent layout), then one rotation per
-/// channel-driven part.
-fn bee_bytes(layout: GltfLayout, frames: usize, scale_varies: bool, driven: usize) -> usize {
+/// channel-driven part, then the agent node's STEP scale if it hides.
+fn bee_bytes(st: &BeeState, layout: GltfLayout, frames: usize, driven: usize) -> usize {
     let body = if layout == GltfLayout::Parts {
         12 + 16
     } else {
         0
     };
-    frames * (12 + 16 + body + if scale_varies { 12 } else { 0 } + 16 * driven)
+    let scale = if st.scale_varies { 12 } else { 0 };
+    let shown = if st.hides { 12 } else { 0 };
+    frames * (12 + 16 + body + scale + 16 * driven + shown)
+}
+
+/// The agent node's scale at a frame of its record while it hides: 0 hidden, else 1 (parts
+/// layout, whose body node holds the scale) or its scale (agent layout).
+fn shown_scale(layout: GltfLayout, rec: &[f32; RECORD_FLOATS]) -> f32 {
+    match layout {
+        GltfLayout::Parts => rec[13],
+        GltfLayout::Agent => rec[12] * rec[13],
+    }
 }
 
 /// Byte offsets (per frame) in an agent's tracks: (scale, first driven rotation).
@@ -881,18 +903,19 @@ impl Layout {
         let mut offset = head.len() as u64;
         let mut channels = Vec::new();
         let mut samplers = Vec::new();
-        let track = |samplers: &mut Vec<json::animation::Sampler>,
-                     channels: &mut Vec<json::animation::Channel>,
-                     node: Index<json::Node>,
-                     output: Index<json::Accessor>,
-                     path: json::animation::Property| {
+        let track_as = |samplers: &mut Vec<json::animation::Sampler>,
+                        channels: &mut Vec<json::animation::Channel>,
+                        node: Index<json::Node>,
+                        output: Index<json::Accessor>,
+                        path: json::animation::Property,
+                        interpolation: json::animation::Interpolation| {
             let sampler = Index::push(
                 samplers,
                 json::animation::Sampler {
                     extensions: None,
                     extras: None,
                     input: time_acc.expect("tracks only when animated"),
-                    interpolation: Valid(json::animation::Interpolation::Linear),
+                    interpolation: Valid(interpolation),
                     output,
                 },
             );
@@ -907,6 +930,14 @@ impl Layout {
                 extensions: None,
                 extras: None,
             });
+        };
+        let track = |samplers: &mut Vec<json::animation::Sampler>,
+                     channels: &mut Vec<json::animation::Channel>,
+                     node: Index<json::Node>,
+                     output: Index<json::Accessor>,
+                     path: json::animation::Property| {
+            let linear = json::animation::Interpolation::Linear;
+            track_as(samplers, channels, node, output, path, linear);
         };
         use json::animation::Property::{Rotation, Scale, Translation};
         let mut scene_nodes = Vec::new();
@@ -929,7 +960,7 @@ impl Layout {
                 let st = &w.bees[g];
                 let f = &st.first;
                 g += 1;
-                let size = bee_bytes(w.layout, frames, st.scale_varies, plan.driven.len());
+                let size = bee_bytes(st, w.layout, frames, plan.driven.len());
                 let bv = root.push(json::buffer::View {
                     buffer,
                     byte_length: USize64(size as u64),
@@ -960,6 +991,10 @@ impl Layout {
                         root.push(accessor(bv, at, frames, F32, Type::Vec4))
                     })
                     .collect();
+                let shown_s = st.hides.then(|| {
+                    let at = driven_at + plan.driven.len() * frames * 16;
+                    root.push(accessor(bv, at, frames, F32, Type::Vec3))
+                });
 
                 let name = agent_name(sp, id);
                 let group = wings::group(id);
@@ -987,11 +1022,18 @@ impl Layout {
                     (!v.is_empty()).then_some(v)
                 };
                 let bee = at(0);
+                let rest_scale = if st.hides {
+                    shown_scale(w.layout, f)
+                } else if agent_layout {
+                    f[12]
+                } else {
+                    1.0
+                };
                 root.push(json::Node {
                     children: kids(None),
                     translation: Some([f[0], f[1], f[2]]),
                     rotation: Some(json::scene::UnitQuaternion([f[3], f[4], f[5], f[6]])),
-                    scale: (agent_layout && f[12] != 1.0).then_some([f[12]; 3]),
+                    scale: (rest_scale != 1.0).then_some([rest_scale; 3]),
                     mesh: if agent_layout { set.agent_mesh } else { None },
                     ..node(name.clone())
                 });
@@ -1044,7 +1086,10 @@ impl Layout {
                 children.push(bee);
                 track(&mut samplers, &mut channels, bee, bee_t, Translation);
                 track(&mut samplers, &mut channels, bee, bee_r, Rotation);
-                if let (true, Some(s)) = (agent_layout, body_s) {
+                if let Some(s) = shown_s {
+                    let step = json::animation::Interpolation::Step;
+                    track_as(&mut samplers, &mut channels, bee, s, Scale, step);
+                } else if let (true, Some(s)) = (agent_layout, body_s) {
                     track(&mut samplers, &mut channels, bee, s, Scale);
                 }
                 for (k, part) in sp.parts.iter().enumerate() {
@@ -1173,6 +1218,15 @@ fn write_bin(w: &GltfWriter, layout: &Layout, out: &mut AtomicFile) -> Result<()
                     };
                     prev = Some(q);
                     track.extend_from_slice(&f32_bytes(q.to_array()));
+                }
+            }
+            if st.hides {
+                for f in 0..frames {
+                    let floats: [f32; RECORD_FLOATS] = std::array::from_fn(|k| {
+                        f32::from_le_bytes(rec(f)[4 * k..4 * k + 4].try_into().expect("4 bytes"))
+                    });
+                    let v = shown_scale(w.layout, &floats);
+                    track.extend_from_slice(&f32_bytes([v; 3]));
                 }
             }
             out.write_all(&track).map_err(io)?;

@@ -23,6 +23,7 @@ fn meta(swarms: &[(&str, usize, f32)], start: i32, end: i32) -> CacheMeta {
                 channels: crate::species::BEE_CHANNELS.to_vec(),
                 body_length_m: len,
                 wing_beat_hz: 230.0,
+                hidden: None,
             })
             .collect(),
     }

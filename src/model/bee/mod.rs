@@ -6,6 +6,7 @@
 //! Eq. 1: a = κ1 F_o + γ (κ2 F_curl + F_target) + κ3 F_repul − drag, with the terms the
 //! paper leaves implicit described in docs/model.md.
 
+pub mod hive;
 pub mod kernels;
 pub mod oscillation;
 pub mod params;
@@ -32,6 +33,8 @@ const SWAY_PATH_S: f32 = 0.3;
 pub const FLYING: f32 = 0.0;
 pub const HOVERING: f32 = 1.0;
 pub const LANDED: f32 = 2.0;
+/// Inside a hive (hidden in the caches; see `hive`).
+pub const INSIDE: f32 = 3.0;
 /// Speed, m/s, below which a flying bee is recorded as hovering.
 const HOVER_SPEED: f32 = 0.1;
 /// A bee touches down on a target with `land = true` once its body is this close to the
@@ -66,11 +69,14 @@ pub struct Bee {
     /// Attitude (yaw rad, pitch deg, roll deg) one substep earlier: the recorded angular
     /// velocity is the rotation between the two attitudes over that substep.
     prev_attitude: (f32, f32, f32),
-    /// `FLYING`, `HOVERING` or `LANDED` (recorded as the `state` channel).
+    /// `FLYING`, `HOVERING`, `LANDED` or `INSIDE` (recorded as the `state` channel).
     state: f32,
-    /// Landed: seconds left before taking off. Flying: seconds before it may land again.
+    /// Landed: seconds left before taking off (or going in). Inside: seconds left before
+    /// coming out. Flying: seconds before it may land again.
     timer: f32,
-    /// Landed: the body's offset from the centre of the target it sits on, and that
+    /// Landed on a hive entrance: 1 if this stay ends by going in, 0 if by taking off.
+    going_in: f32,
+    /// Landed or inside: the body's offset from the centre of the target it sits on, and that
     /// target's index (as f32, so that the state stays plain 4-byte words).
     perch: Vec3,
     perch_target: f32,
@@ -96,6 +102,9 @@ impl Agent for Bee {
             self.climb_deg = elevation_deg(velocity);
         }
         self.prev_attitude = (self.c.yaw, self.pitch_deg, self.drawn_roll_deg);
+    }
+    fn hidden(&self) -> bool {
+        self.state == INSIDE
     }
 }
 
@@ -142,6 +151,7 @@ impl Model for BeeModel {
         species: &HONEYBEE,
     };
     const GATHERS: bool = true;
+    const HIDDEN_STATE: Option<(&'static str, f32)> = Some(("state", INSIDE));
 
     fn new(s: &SwarmSetup) -> Self {
         let p = BeeParams::from_values(s.params);
@@ -196,7 +206,7 @@ impl Model for BeeModel {
         let pitch_deg =
             climb_deg + oscillation::pitch_deg(phase_pitch as f64) - oscillation::MEAN_PITCH_DEG;
         let roll_deg = oscillation::roll_deg(phase_roll as f64);
-        Bee {
+        let bee = Bee {
             c,
             wander: rng.gaussian(),
             mean_pos: c.pos,
@@ -212,6 +222,11 @@ impl Model for BeeModel {
             prev_attitude: (c.yaw, pitch_deg, roll_deg),
             phase_pitch,
             phase_roll,
+            going_in: 0.0,
+        };
+        match start.inside {
+            Some(h) => hive::starting_inside(bee, h),
+            None => bee,
         }
     }
 
@@ -243,8 +258,12 @@ impl Model for BeeModel {
     }
 
     fn step(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
-        if b.state == LANDED {
-            return self.perched(cx, b);
+        if b.state >= LANDED {
+            return if b.state == LANDED {
+                self.perched(cx, i, b)
+            } else {
+                self.inside(cx, i, b)
+            };
         }
         let c = &b.c;
         let ri = self.flight.body_radius(c.size);
@@ -468,14 +487,16 @@ impl BeeModel {
             out.state = LANDED;
             let u = cx.rng(0x1A4D, i).f32();
             out.timer = t.stay.0 + (t.stay.1 - t.stay.0) * u;
+            out.going_in = t.inside.is_some() as u8 as f32;
             out.mean_pos = out.c.pos;
             return;
         }
     }
 
     /// A landed bee: it sits still on its target (moving with it), level, until its stay
-    /// is over, then takes off away from the target's surface at half its cruising speed.
-    fn perched(&self, cx: &Context, b: &Bee) -> Bee {
+    /// is over, then takes off away from the target's surface at half its cruising speed
+    /// (or, on a hive entrance it has just landed on, goes in: `hive`).
+    fn perched(&self, cx: &Context, i: usize, b: &Bee) -> Bee {
         let t = &cx.targets[b.perch_target as usize];
         let mut out = *b;
         out.prev_attitude = (b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
@@ -490,6 +511,9 @@ impl BeeModel {
             out.c.vel = Vec3::ZERO;
             return out;
         }
+        if b.going_in > 0.5 {
+            return self.go_inside(cx, i, out);
+        }
         let away = normalize_or(b.perch, Vec3::Y);
         out.c.vel = away * (0.5 * b.c.speed);
         let horizontal = Vec3::new(away.x, 0.0, away.z);
@@ -497,7 +521,11 @@ impl BeeModel {
             out.c.yaw = math::yaw_of(horizontal);
         }
         out.state = FLYING;
-        out.timer = TAKE_OFF_S;
+        out.timer = if t.inside.is_some() {
+            hive::LEAVE_S
+        } else {
+            TAKE_OFF_S
+        };
         out
     }
 }
