@@ -29,6 +29,11 @@ pub struct FastswarmDbArgs {
     /// Samples slower than this (an insect at rest) are left out, m/s.
     #[arg(long, default_value_t = 0.01)]
     pub min_speed: f64,
+    /// Build from part I of N of the tracks only: their ids numbered 0, 1, … in order of
+    /// first appearance, those equal to I mod N kept (hold the others out for `beeswarm
+    /// eval --reference-part`).
+    #[arg(long, value_name = "I/N")]
+    pub part: Option<tracks::Part>,
     /// A line of provenance for the file's header (source, licence).
     #[arg(long)]
     pub note: Vec<String>,
@@ -47,7 +52,10 @@ pub fn run(a: FastswarmDbArgs) -> Result<()> {
             a.min_speed
         )));
     }
-    let ds = tracks::read(&a.tracks)?;
+    let mut ds = tracks::read(&a.tracks)?;
+    if let Some(p) = a.part {
+        ds = ds.part(p);
+    }
     let series = resample::resample(&ds, a.dt);
     let velocities: Vec<&[glam::DVec3]> = series.iter().map(|u| u.velocity.as_slice()).collect();
     let opts = BuildOptions {
@@ -65,11 +73,12 @@ pub fn run(a: FastswarmDbArgs) -> Result<()> {
         .unwrap_or_default();
     let mut provenance = format!(
         "FASTSWARM velocity database (paper 003's D): vx,vy,vz m/s, ax,ay,az m/s², world Y-up.\n\
-         Built by: beeswarm fastswarm-db {name} --dt {} --samples {} --min-speed {}\n\
+         Built by: beeswarm fastswarm-db {name} --dt {} --samples {} --min-speed {}{}\n\
          From {} tracks, {} samples; {} kept, evenly over the speed ranks.",
         a.dt,
         a.samples,
         a.min_speed,
+        a.part.map_or(String::new(), |p| format!(" --part {p}")),
         ds.tracks.len(),
         ds.sample_count(),
         db.samples.len()

@@ -25,6 +25,12 @@ pub struct EvalArgs {
     /// The recording to compare with.
     #[arg(long, value_name = "REAL")]
     pub reference: PathBuf,
+    /// Compare with part I of N of the recording only: its ids (recorded segments)
+    /// numbered 0, 1, … in order of first appearance, those equal to I mod N kept — the
+    /// flights held out from a model built on another part (`beeswarm fastswarm-db
+    /// --part`).
+    #[arg(long, value_name = "I/N")]
+    pub reference_part: Option<tracks::Part>,
     /// More simulated tracks compared in the same report and figure (repeatable,
     /// `NAME=PATH` and `NAME=A.csv,B.csv` allowed), e.g. baseline models.
     #[arg(long = "candidate", value_name = "TRACKS")]
@@ -156,7 +162,10 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             )));
         }
     }
-    let reference = tracks::read(&args.reference)?;
+    let mut reference = tracks::read(&args.reference)?;
+    if let Some(p) = args.reference_part {
+        reference = reference.part(p);
+    }
     // Per candidate, its runs: measured one by one (neighbours only within a run), pooled.
     let mut sims: Vec<(String, Vec<tracks::Dataset>)> = Vec::new();
     for s in std::iter::once(&args.tracks).chain(&args.candidates) {

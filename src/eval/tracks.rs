@@ -59,6 +59,34 @@ pub enum TrackFormat {
     Memory,
 }
 
+/// Part `i` of `n` of a data set, for held-out evaluation: its ids numbered 0, 1, 2, … in
+/// the order they first appear, those numbered i mod n kept (`I/N` on the command line,
+/// e.g. `0/2` the even-numbered recorded segments, `1/2` the odd ones).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Part {
+    pub i: usize,
+    pub n: usize,
+}
+
+impl std::str::FromStr for Part {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Part, String> {
+        let bad = || format!("expected I/N with 0 ≤ I < N (e.g. 1/2), found `{s}`");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (i, n) = (i.trim().parse(), n.trim().parse());
+        match (i, n) {
+            (Ok(i), Ok(n)) if i < n => Ok(Part { i, n }),
+            _ => Err(bad()),
+        }
+    }
+}
+
+impl std::fmt::Display for Part {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "{}/{}", self.i, self.n)
+    }
+}
+
 /// A named set of tracks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Dataset {
@@ -70,6 +98,17 @@ pub struct Dataset {
 impl Dataset {
     pub fn sample_count(&self) -> usize {
         self.tracks.iter().map(Track::len).sum()
+    }
+
+    /// Only the tracks of part `p` (see [`Part`]); the name says which part.
+    pub fn part(mut self, p: Part) -> Dataset {
+        let mut rank: HashMap<String, usize> = HashMap::new();
+        self.tracks.retain(|t| {
+            let next = rank.len();
+            *rank.entry(t.id.clone()).or_insert(next) % p.n == p.i
+        });
+        self.name = format!("{} (part {p})", self.name);
+        self
     }
 
     /// Median time step over all tracks, seconds (0 when no track has two samples).
@@ -276,6 +315,25 @@ mod tests {
         assert_eq!(lens, vec![2, 3, 1]);
         assert_eq!(d.tracks[2].id, "2");
         assert!((d.median_step() - 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn parts_split_the_ids_and_keep_split_pieces_together() {
+        let text = "object;time;XSplined;YSplined;ZSplined;VXSplined;VYSplined;VZSplined\n\
+            9;0.00;0;0;0;1;0;0\n9;0.02;0.02;0;0;1;0;0\n9;NaN;NaN;NaN;NaN;NaN;NaN;NaN\n\
+            9;0.10;0.1;0;0;1;0;0\n4;0.00;5;0;0;0;1;0\n7;0.00;1;0;0;0;1;0\n";
+        let d = parse(text, "x").unwrap();
+        let ids = |p: &str| -> Vec<String> {
+            let part = d.clone().part(p.parse().unwrap());
+            part.tracks.iter().map(|t| t.id.clone()).collect()
+        };
+        // Ids in order of first appearance: 9 (two pieces), 4, 7.
+        assert_eq!(ids("0/2"), ["9", "9", "7"]);
+        assert_eq!(ids("1/2"), ["4"]);
+        assert_eq!(ids("2/3"), ["7"]);
+        for bad in ["2/2", "1", "a/2", "0/0", "-1/2"] {
+            assert!(bad.parse::<Part>().is_err(), "{bad}");
+        }
     }
 
     #[test]

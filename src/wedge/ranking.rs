@@ -23,6 +23,7 @@ pub fn write(dir: &Path, manifest: &Manifest, reference: &Path) -> Result<Vec<Pa
     let args = EvalArgs {
         tracks: tracks(0),
         reference: reference.to_path_buf(),
+        reference_part: None,
         candidates: (1..manifest.variants.len()).map(tracks).collect(),
         out: Some(json.clone()),
         figure: None,

@@ -12,9 +12,17 @@
 use glam::{DVec3, Vec3};
 use std::fmt::Write as _;
 
-/// Samples per speed group. An agent searches its own group and the two beside it, so it
-/// weighs at most 3 × 100 = 300 candidates: the paper's k = 300 (Sec. 5.2.1).
+/// Samples per speed group. An agent searches its own group and the two beside it: at most
+/// 3 × 100 = 300 samples, the paper's k = 300 (Sec. 5.2.1), each weighed once (one
+/// rotation about the vertical per sample, see [`Family`]), so at most k candidates.
 pub const GROUP_SIZE: usize = 100;
+
+/// The fewest samples a database may hold (three speed groups).
+pub const MIN_SAMPLES: usize = 3 * GROUP_SIZE;
+
+/// Candidates evaluated at once: plain `[f32; LANES]` arrays the compiler turns into SIMD
+/// instructions (the same arithmetic, so the same bits, as one at a time).
+pub const LANES: usize = 8;
 
 /// One recorded sample d_v = [v, a] (paper 003 Sec. 4).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,41 +33,105 @@ pub struct Sample {
     pub a: Vec3,
 }
 
-/// A sample with what every step would otherwise recompute for it: its unit vectors, |a|,
-/// and the horizontal direction of the velocity it was recorded coming from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Prepared {
-    pub v: Vec3,
-    pub a: Vec3,
-    /// v̂ (zero when v is).
-    pub v_unit: Vec3,
-    /// â (zero when a is).
-    pub a_unit: Vec3,
-    pub a_len: f32,
-    /// Unit horizontal (x, z) direction of v − aΔt, the velocity one recorded step
-    /// earlier; (0, 0) when it has none.
-    pub back: (f32, f32),
+/// How a sample is turned about the vertical before it is weighed (selection.rs): the
+/// samples of even speed rank *continue* (turned so that the velocity they were recorded
+/// coming from has the agent's heading), those of odd rank are turned *free* (by one random
+/// angle per agent per step).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    Continuing = 0,
+    Free = 1,
 }
 
-impl Prepared {
-    /// `d` prepared for a database of step `dt`.
-    pub fn new(d: Sample, dt: f32) -> Self {
-        let unit = |u: Vec3| crate::math::normalize_or(u, Vec3::ZERO);
-        let b = d.v - d.a * dt;
-        let h = (b.x * b.x + b.z * b.z).sqrt();
-        Prepared {
-            v: d.v,
-            a: d.a,
-            v_unit: unit(d.v),
-            a_unit: unit(d.a),
-            a_len: d.a.length(),
-            back: if h > 1e-6 {
-                (b.x / h, b.z / h)
-            } else {
-                (0.0, 0.0)
-            },
-        }
+impl Family {
+    pub const BOTH: [Family; 2] = [Family::Continuing, Family::Free];
+
+    /// The family's samples among the first `n` of the database (by speed rank).
+    pub fn count_below(self, n: usize) -> usize {
+        (n + 1 - self as usize) / 2
     }
+
+    /// The database index of the family's `j`-th sample.
+    pub fn index(self, j: usize) -> usize {
+        2 * j + self as usize
+    }
+}
+
+/// One family's samples as a struct of arrays, in speed order, each array padded with
+/// [`LANES`] empty samples so that a batch may start at any sample. Vectors are in the
+/// family's frame: a continuing sample is turned so that the horizontal direction of
+/// v − aΔt (the velocity one recorded step earlier) is +x, so that one rotation per agent
+/// (+x to its heading) turns every continuing candidate; a free sample is as recorded.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Soa {
+    /// Velocity s, m/s.
+    pub vx: Vec<f32>,
+    pub vy: Vec<f32>,
+    pub vz: Vec<f32>,
+    /// ŝ (zero when s is).
+    pub ux: Vec<f32>,
+    pub uy: Vec<f32>,
+    pub uz: Vec<f32>,
+    /// 1 where s has no direction, else 0 (Eq. 7's ‖ŝ − û‖ is then 1).
+    pub nodir: Vec<f32>,
+    /// â (zero when a is).
+    pub ax: Vec<f32>,
+    pub ay: Vec<f32>,
+    pub az: Vec<f32>,
+    /// 1 where a has a direction, else 0.
+    pub ahas: Vec<f32>,
+    /// |a|, m/s².
+    pub alen: Vec<f32>,
+}
+
+impl Soa {
+    /// The (v, a) pairs as given, padded.
+    pub fn new(pairs: impl Iterator<Item = (Vec3, Vec3)>) -> Self {
+        let mut s = Soa::default();
+        let unit = |u: Vec3| crate::math::normalize_or(u, Vec3::ZERO);
+        let pad = std::iter::repeat_n((Vec3::ZERO, Vec3::ZERO), LANES);
+        for (v, a) in pairs.chain(pad) {
+            let (u, ah) = (unit(v), unit(a));
+            s.vx.push(v.x);
+            s.vy.push(v.y);
+            s.vz.push(v.z);
+            s.ux.push(u.x);
+            s.uy.push(u.y);
+            s.uz.push(u.z);
+            s.nodir.push(if u == Vec3::ZERO { 1.0 } else { 0.0 });
+            s.ax.push(ah.x);
+            s.ay.push(ah.y);
+            s.az.push(ah.z);
+            s.ahas.push(if ah == Vec3::ZERO { 0.0 } else { 1.0 });
+            s.alen.push(a.length());
+        }
+        s
+    }
+
+    /// Sample `j`'s velocity (in the family's frame).
+    pub fn v(&self, j: usize) -> Vec3 {
+        Vec3::new(self.vx[j], self.vy[j], self.vz[j])
+    }
+}
+
+/// (cos, sin) of the rotation about +Y that takes sample `d`'s previous horizontal heading
+/// (of v − aΔt) to +x; identity where it has none.
+fn to_plus_x(d: &Sample, dt: f32) -> (f32, f32) {
+    let b = d.v - d.a * dt;
+    let h = (b.x * b.x + b.z * b.z).sqrt();
+    // Rotation by θ about +Y maps (x, z) to (x cos θ + z sin θ, −x sin θ + z cos θ).
+    if h > 1e-6 {
+        (b.x / h, b.z / h)
+    } else {
+        (1.0, 0.0)
+    }
+}
+
+/// Rotation about +Y by the angle whose cosine and sine are `c`, `s`:
+/// (x, y, z) → (x c + z s, y, −x s + z c).
+#[inline]
+pub fn turn(v: Vec3, c: f32, s: f32) -> Vec3 {
+    Vec3::new(c * v.x + s * v.z, v.y, -s * v.x + c * v.z)
 }
 
 /// The database: samples sorted by speed, in groups of [`GROUP_SIZE`].
@@ -68,8 +140,8 @@ pub struct Database {
     /// Step the accelerations were differenced over, s.
     pub dt: f64,
     pub samples: Vec<Sample>,
-    /// `samples`, prepared for the search.
-    prepared: Vec<Prepared>,
+    /// The samples of each [`Family`], laid out for the search.
+    families: [Soa; 2],
     /// Upper speed of each group (the speed of its fastest sample), m/s.
     group_top: Vec<f32>,
     /// Mean |a| over the samples, m/s²: the scale of Eq. 10's magnitude term.
@@ -139,12 +211,11 @@ pub fn build(series: &[&[DVec3]], opts: &BuildOptions) -> Result<Database, Strin
             all.push((s, row));
         }
     }
-    if all.len() < 3 * GROUP_SIZE {
+    if all.len() < MIN_SAMPLES {
         return Err(format!(
-            "{} flying samples at a {} s step; a database needs at least {}",
+            "{} flying samples at a {} s step; a database needs at least {MIN_SAMPLES}",
             all.len(),
             opts.dt,
-            3 * GROUP_SIZE
         ));
     }
     // Sort by speed, ties by the values themselves, so the order never depends on the
@@ -153,7 +224,7 @@ pub fn build(series: &[&[DVec3]], opts: &BuildOptions) -> Result<Database, Strin
         x.0.total_cmp(&y.0)
             .then_with(|| x.1.partial_cmp(&y.1).unwrap_or(std::cmp::Ordering::Equal))
     });
-    let n = all.len().min(opts.max_samples.max(3 * GROUP_SIZE));
+    let n = all.len().min(opts.max_samples.max(MIN_SAMPLES));
     let samples = (0..n)
         .map(|i| {
             let r = all[i * all.len() / n].1;
@@ -177,14 +248,20 @@ impl Database {
         let mean_accel = (samples.iter().map(|s| s.a.length() as f64).sum::<f64>()
             / samples.len().max(1) as f64)
             .max(1e-6) as f32;
-        let prepared = samples
-            .iter()
-            .map(|&d| Prepared::new(d, dt as f32))
-            .collect();
+        let family = |f: Family| {
+            Soa::new(samples.iter().skip(f as usize).step_by(2).map(|d| match f {
+                Family::Continuing => {
+                    let (c, s) = to_plus_x(d, dt as f32);
+                    (turn(d.v, c, s), turn(d.a, c, s))
+                }
+                Family::Free => (d.v, d.a),
+            }))
+        };
+        let families = Family::BOTH.map(family);
         Database {
             dt,
             samples,
-            prepared,
+            families,
             group_top,
             mean_accel,
         }
@@ -198,16 +275,22 @@ impl Database {
         })
     }
 
-    /// The candidates for an agent flying at `speed`: its speed group and the groups
-    /// beside it (paper 003 Sec. 5.2.1, "reduced search space").
-    pub fn candidates(&self, speed: f32) -> &[Prepared] {
+    /// The candidates for an agent flying at `speed`, as the range of sample indices: its
+    /// speed group and the groups beside it (paper 003 Sec. 5.2.1, "reduced search space").
+    pub fn candidates(&self, speed: f32) -> std::ops::Range<usize> {
         let g = self
             .group_top
             .partition_point(|&top| top < speed)
             .min(self.group_top.len() - 1);
         let lo = g.saturating_sub(1) * GROUP_SIZE;
         let hi = ((g + 2) * GROUP_SIZE).min(self.samples.len());
-        &self.prepared[lo..hi]
+        lo..hi
+    }
+
+    /// A family's samples, laid out for the search (sample `j` is database sample
+    /// `family.index(j)`).
+    pub fn family(&self, f: Family) -> &Soa {
+        &self.families[f as usize]
     }
 
     /// Number of speed groups.
@@ -287,13 +370,12 @@ impl Database {
             });
         }
         let dt = dt.ok_or((0, "no `dt = <seconds>` line".to_owned()))?;
-        if samples.len() < 3 * GROUP_SIZE {
+        if samples.len() < MIN_SAMPLES {
             return Err((
                 0,
                 format!(
-                    "{} samples; a database needs at least {} (three speed groups of {GROUP_SIZE})",
+                    "{} samples; a database needs at least {MIN_SAMPLES} (three speed groups of {GROUP_SIZE})",
                     samples.len(),
-                    3 * GROUP_SIZE
                 ),
             ));
         }
@@ -316,8 +398,15 @@ mod tests {
             assert!(w[0].v.length() <= w[1].v.length());
         }
         for speed in [0.0, 0.1, 0.2, 0.5, 5.0] {
-            let c = db.candidates(speed);
+            let c = &db.samples[db.candidates(speed)];
             assert!(c.len() <= 3 * GROUP_SIZE && c.len() >= 2 * GROUP_SIZE);
+            // Each sample is weighed once: the two families split the range.
+            let r = db.candidates(speed);
+            let n: usize = Family::BOTH
+                .map(|f| f.count_below(r.end) - f.count_below(r.start))
+                .iter()
+                .sum();
+            assert_eq!(n, c.len());
             let (lo, hi) = (c[0].v.length(), c[c.len() - 1].v.length());
             assert!(
                 (lo <= speed || lo == db.samples[0].v.length())

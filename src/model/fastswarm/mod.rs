@@ -23,7 +23,7 @@ use crate::field::CurlNoise;
 use crate::math::{self, Rng};
 use crate::species::{Channel, HONEYBEE};
 use database::Database;
-use energies::{Energy, MAX_STIMULI};
+use energies::{Attraction, Energy, MAX_STIMULI};
 use glam::Vec3;
 use params::FastswarmParams;
 use shape::Tour;
@@ -31,7 +31,7 @@ use shape::Tour;
 /// Random stream of the free rotation (selection.rs).
 const TURN_STREAM: u64 = 0xFA57_5A4D;
 /// The most attraction neighbours an agent averages over (Eq. 6): a whole 500-agent shape
-/// fits, and a bound keeps the step's memory fixed.
+/// fits, and a bound keeps the step's cost bounded.
 const MAX_ATTRACTION: usize = 512;
 /// Time constant of the body's heading following the direction of travel, s.
 const HEADING_LAG: f32 = 0.04;
@@ -202,25 +202,29 @@ impl Model for FastswarmModel {
         // Eq. 4 and 6: neighbours in the repulsion and attraction zones.
         let (d_rep, d_att1, d_att2) = (p.d_rep as f32, p.d_att1 as f32, p.d_att2 as f32);
         let mut rep = [Vec3::ZERO; MAX_NEIGHBOURS];
-        let mut att = [Vec3::ZERO; MAX_ATTRACTION];
-        let (mut nr, mut na) = (0, 0);
+        let mut nr = 0;
         cx.for_each_neighbour(i, d_rep, |j, pj, _| {
             rep[nr] = pj + cx.agents[j].vel * dt;
             nr += 1;
         });
-        // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
-        // more, the first MAX_ATTRACTION found (the sum is an average).
-        self.cells.for_each_near(pos, |j| {
-            let d2 = cx.agents[j].pos.distance_squared(pos);
-            if j != i && d2 >= d_att1 * d_att1 && d2 < d_att2 * d_att2 && na < att.len() {
-                att[na] = cx.agents[j].pos;
-                na += 1;
-            }
-        });
         e.repulsion(p.w_rep as f32, d_rep, &rep[..nr]);
         // Table 1, escaping "in danger": no attraction to neighbours or the centre.
         let calm = if startled { 0.0 } else { 1.0 };
-        e.attraction(p.w_oa as f32 * calm, d_att1, &att[..na]);
+        let w_oa = p.w_oa as f32 * calm;
+        // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
+        // more, the first MAX_ATTRACTION found (the sum is an average).
+        let mut att = Attraction::new(self.rho, d_att1, pos);
+        if w_oa > 0.0 {
+            self.cells.for_each_near(pos, |j| {
+                let q = cx.agents[j].pos;
+                let d2 = q.distance_squared(pos);
+                if j != i && d2 >= d_att1 * d_att1 && d2 < d_att2 * d_att2 && att.n < MAX_ATTRACTION
+                {
+                    att.add(q);
+                }
+            });
+        }
+        e.attraction_sums(w_oa, &att);
         if let Some(c) = self.center {
             e.direction(p.w_cos as f32 * calm, c - pos);
         }
@@ -237,7 +241,7 @@ impl Model for FastswarmModel {
         let free = cx.rng(TURN_STREAM, i).range(0.0, std::f32::consts::TAU);
         let ri = self.radius * b.fly.c.size;
         let clear = |q: Vec3| cx.obstacle_queries(q).all(|o| o.distance >= ri);
-        let chosen = selection::select(&e, self.db.candidates(vel.length()), free, clear);
+        let chosen = selection::select(&e, &self.db, self.db.candidates(vel.length()), free, clear);
         // With every candidate refused (boxed in by obstacles) the agent keeps its
         // velocity and the shared guard stops it at the surface.
         let v = chosen.map_or(vel, |c| c.v);

@@ -42,7 +42,8 @@ impl CellIndex {
 
     /// Calls `f(j)` for every indexed agent in the 27 cells around `p` (all those within
     /// one cell edge of it, and some farther), in a fixed order: cell by cell, each in
-    /// index order, so that sums over them do not depend on threads.
+    /// index order, so that sums over them do not depend on threads. The three cells of a
+    /// row along z have consecutive keys, so each row is one run of the sorted list.
     #[inline]
     pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(usize)) {
         if self.sorted.is_empty() {
@@ -51,12 +52,12 @@ impl CellIndex {
         let c = [p.x, p.y, p.z].map(|x| coord(x, self.cell));
         for dx in -1..=1 {
             for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let k = key([c[0] + dx, c[1] + dy, c[2] + dz]);
-                    let start = self.sorted.partition_point(|e| e.0 < k);
-                    for e in self.sorted[start..].iter().take_while(|e| e.0 == k) {
-                        f(e.1 as usize);
-                    }
+                // No cell lies beyond the clamp bounds (`coord`), so the row stops there.
+                let lo = key([c[0] + dx, c[1] + dy, (c[2] - 1).max(-(1 << 20))]);
+                let hi = key([c[0] + dx, c[1] + dy, (c[2] + 1).min((1 << 20) - 1)]);
+                let start = self.sorted.partition_point(|e| e.0 < lo);
+                for e in self.sorted[start..].iter().take_while(|e| e.0 <= hi) {
+                    f(e.1 as usize);
                 }
             }
         }

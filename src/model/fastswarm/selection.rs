@@ -1,100 +1,115 @@
-//! The minimiser of Eq. 1: the candidate (v, a) from the database, rotated about the
-//! vertical, with the least energy.
+//! The minimiser of Eq. 1: the candidate from the database, rotated about the vertical,
+//! with the least energy.
 //!
 //! The recording holds a few hundred headings per speed group, so the candidates are
-//! rotated about world +Y (the vertical; speed and climb rate are unchanged) in two ways,
-//! and both are weighed:
-//! - **continuing**: each sample turned so that the velocity it was recorded coming from,
+//! rotated about world +Y (the vertical; speed and climb rate are unchanged), each sample
+//! one way, by its speed rank (database::Family):
+//! - **continuing** (even rank): turned so that the velocity it was recorded coming from,
 //!   v − aΔt, has the agent's current heading: the recorded manoeuvre, flown from here;
-//! - **free**: every sample turned by one random angle, drawn per agent per step, so that
+//! - **free** (odd rank): turned by one random angle, drawn per agent per step, so that
 //!   any heading can be reached.
+//!
+//! Every sample of the search range is thus one candidate: at most k = 300 (Sec. 5.2.1).
+//! Each family is evaluated in batches of [`LANES`] in its own frame (Energy::frame).
 //!
 //! Conventions: world Y-up, m/s, m/s².
 
-use super::database::{Prepared, Sample};
+use super::database::{Database, Family, LANES, Sample, turn};
 use super::energies::Energy;
 use glam::{Quat, Vec3};
 
-/// Rotation about +Y by the angle whose cosine and sine are `c`, `s`.
-#[inline]
-fn turn(v: Vec3, c: f32, s: f32) -> Vec3 {
-    Vec3::new(c * v.x + s * v.z, v.y, -s * v.x + c * v.z)
-}
-
-/// (cos, sin) of the rotation about +Y taking the horizontal direction of `from` to that
-/// of `to`; identity where either has none. (`select` does the same with unit directions
-/// prepared in advance.)
-#[cfg(test)]
-fn turn_between(from: Vec3, to: Vec3) -> (f32, f32) {
-    let (fx, fz, tx, tz) = (from.x, from.z, to.x, to.z);
-    let (lf, lt) = ((fx * fx + fz * fz).sqrt(), (tx * tx + tz * tz).sqrt());
-    if lf < 1e-6 || lt < 1e-6 {
-        return (1.0, 0.0);
-    }
-    // Rotation by θ about +Y maps (x, z) to (x cos θ + z sin θ, −x sin θ + z cos θ).
-    let c = (fx * tx + fz * tz) / (lf * lt);
-    let s = (fz * tx - fx * tz) / (lf * lt);
-    (c, s)
-}
-
-/// The chosen velocity and acceleration (rotated) and the sample's index.
+/// The chosen velocity (rotated) and the sample's index.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Choice {
     pub v: Vec3,
-    pub a: Vec3,
     pub index: usize,
     pub energy: f32,
 }
 
-/// Eq. 1: the least-energy candidate among `samples` (the first on ties, so the choice is
-/// the same on any machine), each weighed continuing the current heading and turned by
-/// `free_angle` radians; candidates `allowed` refuses (an obstacle) are skipped. `None`
-/// when every candidate is refused.
+/// Eq. 1: the least-energy candidate among the samples `range` of `db`, continuing the
+/// current heading or turned by `free_angle` radians by family; candidates `allowed`
+/// refuses (an obstacle) are skipped. Ties go to the first in a fixed order (continuing,
+/// then free, each by speed rank), so the choice is the same on any machine. `None` when
+/// every candidate is refused.
 pub fn select(
     e: &Energy,
-    samples: &[Prepared],
+    db: &Database,
+    range: std::ops::Range<usize>,
+    free_angle: f32,
+    allowed: impl Fn(Vec3) -> bool,
+) -> Option<Choice> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { select_avx2(e, db, range, free_angle, allowed) };
+    }
+    select_in_batches(e, db, range, free_angle, allowed)
+}
+
+/// [`select_in_batches`] compiled for AVX2 (eight lanes in one instruction instead of
+/// two). The same IEEE operations in the same order (no fused multiply-add: AVX2 does
+/// not enable it, and Rust never contracts), so the same bits as without.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn select_avx2(
+    e: &Energy,
+    db: &Database,
+    range: std::ops::Range<usize>,
+    free_angle: f32,
+    allowed: impl Fn(Vec3) -> bool,
+) -> Option<Choice> {
+    select_in_batches(e, db, range, free_angle, allowed)
+}
+
+#[inline(always)]
+fn select_in_batches(
+    e: &Energy,
+    db: &Database,
+    range: std::ops::Range<usize>,
     free_angle: f32,
     allowed: impl Fn(Vec3) -> bool,
 ) -> Option<Choice> {
     let (fs, fc) = free_angle.sin_cos();
+    // The rotation taking +x (every continuing sample's previous heading) to the agent's
+    // heading; an agent with none continues as if heading +x.
     let (hx, hz) = {
         let h = (e.v.x * e.v.x + e.v.z * e.v.z).sqrt();
         if h > 1e-6 {
             (e.v.x / h, e.v.z / h)
         } else {
-            (0.0, 0.0)
+            (1.0, 0.0)
         }
     };
     let mut best: Option<Choice> = None;
-    for (index, d) in samples.iter().enumerate() {
-        // The rotation taking the sample's previous heading to the agent's (turn_between
-        // with both directions already unit); none where either has no heading.
-        let (bx, bz) = d.back;
-        let (cc, cs) = if (bx == 0.0 && bz == 0.0) || (hx == 0.0 && hz == 0.0) {
-            (1.0, 0.0)
-        } else {
-            (bx * hx + bz * hz, bz * hx - bx * hz)
-        };
-        for (c, s) in [(cc, cs), (fc, fs)] {
-            let v = turn(d.v, c, s);
+    for (family, c, s) in [(Family::Continuing, hx, -hz), (Family::Free, fc, fs)] {
+        let d = db.family(family);
+        let frame = e.frame(c, s);
+        let (lo, hi) = (
+            family.count_below(range.start),
+            family.count_below(range.end),
+        );
+        for start in (lo..hi).step_by(LANES) {
+            let count = (hi - start).min(LANES);
             let bound = best.map_or(f32::INFINITY, |b| b.energy);
-            let Some(energy) = e.of_unit_below(
-                v,
-                turn(d.v_unit, c, s),
-                turn(d.a_unit, c, s),
-                d.a_len,
-                bound,
-            ) else {
+            let energies = frame.energies(d, start, count, bound);
+            // Most batches hold no better candidate: one vector minimum says so.
+            let least = energies.iter().fold(f32::INFINITY, |m, &x| m.min(x));
+            if least >= bound {
                 continue;
-            };
-            let a = turn(d.a, c, s);
-            if energy.is_finite() && allowed(e.p + v * e.dt) {
-                best = Some(Choice {
-                    v,
-                    a,
-                    index,
-                    energy,
-                });
+            }
+            for (l, &energy) in energies.iter().enumerate().take(count) {
+                let better = energy < best.map_or(f32::INFINITY, |b| b.energy);
+                if !better || !energy.is_finite() {
+                    continue;
+                }
+                let v = turn(d.v(start + l), c, s);
+                if allowed(e.p + v * e.dt) {
+                    best = Some(Choice {
+                        v,
+                        index: family.index(start + l),
+                        energy,
+                    });
+                }
             }
         }
     }
@@ -124,30 +139,78 @@ mod tests {
         let a = 0.7f32;
         let (s, c) = a.sin_cos();
         assert!((turn(v, c, s) - turn_quat(a) * v).length() < 1e-6);
-        let (c, s) = turn_between(Vec3::new(1.0, 5.0, 0.0), Vec3::new(0.0, -1.0, 2.0));
-        let r = turn(Vec3::X, c, s);
-        assert!((r - Vec3::Z).length() < 1e-6, "{r}");
+    }
+
+    #[test]
+    fn continuing_candidates_fly_on_from_the_agents_heading() {
+        // Every continuing sample, turned to the agent's heading (as `select` turns it),
+        // is a database velocity turned about the vertical, and the velocity it was
+        // recorded coming from, v − aΔt, then lies along the agent's heading.
+        let db = Database::default_mosquito();
+        let dt = db.dt as f32;
+        let heading = Vec3::new(-0.3, 0.1, 0.4);
+        let h = heading.with_y(0.0).normalize();
+        let d = db.family(Family::Continuing);
+        let mut checked = 0;
+        for j in 0..Family::Continuing.count_below(db.samples.len()) {
+            let sample = db.samples[Family::Continuing.index(j)];
+            let turned = turn(d.v(j), h.x, -h.z);
+            assert!(is_turned(turned, &sample, 1e-5), "{j}");
+            let a = Vec3::new(d.ax[j], d.ay[j], d.az[j]) * d.alen[j];
+            let back = turn(d.v(j) - a * dt, h.x, -h.z).with_y(0.0);
+            if back.length() > 1e-3 {
+                assert!(back.normalize().dot(h) > 1.0 - 1e-4, "{j}: {back}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 500, "{checked}");
+    }
+
+    #[test]
+    fn every_instruction_set_chooses_the_same_bits() {
+        // The AVX2 build of the batches against the portable one, over agents in every
+        // heading and speed group: the same choice and the same energy bits.
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let db = Database::default_mosquito();
+            let mut rng = crate::math::Rng::new(5, 0, 0);
+            for _ in 0..200 {
+                let mut r = || rng.range(-1.0, 1.0);
+                let v = Vec3::new(r(), r() * 0.3, r()) * 0.4;
+                let p = Vec3::new(r(), r(), r());
+                let mut e = Energy::new(2.5, 0.02, p, v);
+                e.direction(1.0, v);
+                e.direction(0.2, Vec3::new(r(), r(), r()));
+                e.repulsion(1.0, 0.03, &[p + Vec3::new(r(), r(), r()) * 0.02]);
+                e.attraction(1.0, 0.08, &[p + Vec3::new(r(), r(), r()) * 0.3]);
+                e.acceleration(1.0, db.mean_accel);
+                let (angle, range) = (r() * 3.0, db.candidates(v.length()));
+                let portable = select_in_batches(&e, db, range.clone(), angle, |_| true);
+                // SAFETY: AVX2 checked above.
+                let avx2 = unsafe { select_avx2(&e, db, range, angle, |_| true) };
+                let bits = |c: Option<Choice>| c.map(|c| (c.index, c.energy.to_bits()));
+                assert_eq!(bits(portable), bits(avx2));
+            }
+        }
     }
 
     #[test]
     fn the_minimum_is_picked_and_refused_candidates_skipped() {
-        let samples: Vec<Prepared> = [0.1f32, 0.2, 0.3]
-            .iter()
-            .map(|&s| {
-                let d = Sample {
-                    v: Vec3::new(0.0, s, 0.0),
-                    a: Vec3::ZERO,
-                };
-                Prepared::new(d, 0.02)
+        // Vertical samples have no heading, so both rotations leave them as they are.
+        let samples: Vec<Sample> = (0..300)
+            .map(|k| Sample {
+                v: Vec3::new(0.0, 0.1 + 0.001 * k as f32, 0.0),
+                a: Vec3::ZERO,
             })
             .collect();
+        let db = Database::new(0.02, samples);
         // Prefers going up fast? A direction term cannot tell speeds apart; attraction can.
         let mut e = Energy::new(2.5, 0.02, Vec3::ZERO, Vec3::Y * 0.2);
         e.attraction(1.0, 0.08, &[Vec3::Y * 0.2]);
-        let c = select(&e, &samples, 0.0, |_| true).unwrap();
-        assert_eq!(c.index, 2);
-        let c = select(&e, &samples, 0.0, |p| p.y < 0.003).unwrap();
-        assert_eq!(c.index, 0);
-        assert!(select(&e, &samples, 0.0, |_| false).is_none());
+        let c = select(&e, &db, 0..300, 0.0, |_| true).unwrap();
+        assert_eq!(c.index, 299);
+        let c = select(&e, &db, 0..300, 0.0, |p| p.y < 0.00299).unwrap();
+        assert_eq!(c.index, 49);
+        assert!(select(&e, &db, 0..300, 0.0, |_| false).is_none());
     }
 }
