@@ -115,7 +115,7 @@ fn main() {
         "[[obstacle]]\ntype = \"mesh\"\nfile = \"ball.obj\"\nposition = [0, 1, 0]\n",
     ));
     let load_s = t.elapsed().as_secs_f64();
-    let Shape::Mesh { mesh } = &with_mesh.obstacles[0].shape else {
+    let Shape::Mesh { mesh, .. } = &with_mesh.obstacles[0].shape else {
         unreachable!()
     };
     let with_sphere = parse(&shot_src(

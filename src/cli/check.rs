@@ -238,7 +238,7 @@ pub fn summary(shot: &Shot) -> String {
             Shape::Capsule { .. } => "capsule".to_owned(),
             Shape::Cylinder { .. } => "cylinder".to_owned(),
             Shape::Plane { .. } => "plane".to_owned(),
-            Shape::Mesh { mesh } => {
+            Shape::Mesh { mesh, .. } => {
                 let (lo, hi) = mesh.bounds();
                 let how = match mesh.mode() {
                     MeshMode::Solid => format!("solid, {} closed piece(s)", mesh.piece_count()),

@@ -473,9 +473,14 @@ fn outline(s: &Shape) -> Vec<Vec3> {
         Shape::Plane { .. } => Vec::new(),
         // The vertices (of a large mesh every k-th triangle's, enough for its outline at
         // preview size).
-        Shape::Mesh { ref mesh } => {
+        Shape::Mesh { ref mesh, pose } => {
             let stride = mesh.triangle_count().div_ceil(20_000).max(1);
-            mesh.triangles().step_by(stride).flatten().collect()
+            let place = |p: Vec3| pose.map_or(p, |r| r.to_world(p));
+            mesh.triangles()
+                .step_by(stride)
+                .flatten()
+                .map(place)
+                .collect()
         }
     }
 }

@@ -520,6 +520,20 @@ impl Simulation {
         }
     }
 
+    /// Moves the moving obstacles to where they stand at time `t`.
+    fn update_obstacles(&mut self, t: f64) {
+        let frame = self.shot.frame_start as f64 + t * self.shot.fps;
+        for (shape, o) in self.obstacles.iter_mut().zip(&self.shot.obstacles) {
+            if let Shape::Mesh {
+                pose: Some(pose), ..
+            } = shape
+                && let Some(now) = o.pose_at(frame)
+            {
+                *pose = now;
+            }
+        }
+    }
+
     /// One integration step of `dt` seconds starting at time `t`.
     fn step(&mut self, t: f64, dt: f32) {
         let n = self.shot.bee_count();
@@ -527,6 +541,11 @@ impl Simulation {
             return;
         }
         self.update_targets(t);
+        // Obstacles where they stand at the end of this step: the positions it makes
+        // must be clear of them then (the frame recorded after the last substep shows the
+        // obstacles at that frame), so the contact guard pushes out a body a moving
+        // obstacle has come onto.
+        self.update_obstacles(t + self.shot.dt());
         // Pass 0: every agent's neighbour record, and the grid over their positions.
         self.agents.resize(n, Neighbour::default());
         for (s, (swarm, rest)) in self.shot.swarms.iter().zip(
