@@ -258,7 +258,11 @@ pub fn summary(shot: &Shot) -> String {
                 )
             }
         };
-        let _ = writeln!(s, "    {}: {kind}", o.name);
+        let motion = match o.keys.len() {
+            0 => String::new(),
+            n => format!(" (in its rest frame), moving on {n} key(s)"),
+        };
+        let _ = writeln!(s, "    {}: {kind}{motion}", o.name);
     }
     let _ = writeln!(s, "  {} target(s)", shot.targets.len());
     for t in &shot.targets {
