@@ -321,7 +321,10 @@ fn start(shot: &Shot, obstacles: &[Shape], si: usize, k: usize) -> (Start, Rng) 
 impl Simulation {
     pub fn new(shot: &Shot) -> Self {
         let shot = shot.clone();
-        let obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape.clone()).collect();
+        let mut obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape.clone()).collect();
+        // The shot places moving meshes at its file's first frame; `--frames` may start
+        // elsewhere.
+        place_obstacles(&mut obstacles, &shot, shot.frame_start as f64);
         let mut swarms: Vec<Box<dyn Swarm>> = Vec::with_capacity(shot.swarms.len());
         let mut first = 0;
         for (si, s) in shot.swarms.iter().enumerate() {
@@ -523,15 +526,7 @@ impl Simulation {
     /// Moves the moving obstacles to where they stand at time `t`.
     fn update_obstacles(&mut self, t: f64) {
         let frame = self.shot.frame_start as f64 + t * self.shot.fps;
-        for (shape, o) in self.obstacles.iter_mut().zip(&self.shot.obstacles) {
-            if let Shape::Mesh {
-                pose: Some(pose), ..
-            } = shape
-                && let Some(now) = o.pose_at(frame)
-            {
-                *pose = now;
-            }
-        }
+        place_obstacles(&mut self.obstacles, &self.shot, frame);
     }
 
     /// One integration step of `dt` seconds starting at time `t`.
@@ -670,6 +665,20 @@ impl Simulation {
             id += swarm.len() as u64;
         }
         self.record = rec;
+    }
+}
+
+/// Puts the moving obstacles among `shapes` (the shot's, in order) where they stand at a
+/// (fractional) frame.
+fn place_obstacles(shapes: &mut [Shape], shot: &Shot, frame: f64) {
+    for (shape, o) in shapes.iter_mut().zip(&shot.obstacles) {
+        if let Shape::Mesh {
+            pose: Some(pose), ..
+        } = shape
+            && let Some(now) = o.pose_at(frame)
+        {
+            *pose = now;
+        }
     }
 }
 
