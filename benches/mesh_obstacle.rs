@@ -7,8 +7,11 @@
 //! JSON line. Timings are wall-clock and vary with the machine and its load. With a last
 //! argument only that shot is simulated (no query timings): for counting instructions,
 //! which a loaded machine does not disturb, e.g.
-//! `valgrind --tool=callgrind --toggle-collect='*Simulation*advance*' target/release/deps/mesh_obstacle-* 10000 6 100000 mesh`
-//! and the same with `none`: the ratio of their instruction counts is the mesh's cost.
+//! `RAYON_NUM_THREADS=1 valgrind --tool=callgrind target/release/deps/mesh_obstacle-* 10000 8 100000 mesh`
+//! less the same run with 2 frames (loading left out; a `--toggle-collect` on the
+//! simulation's functions counts only the calling thread's share, as the steps run on
+//! rayon's worker thread), and
+//! the same with `none`: the ratio of the differences is the mesh's cost.
 //! `turning` is the same ball on keys turning it 90° about its centre over the shot (the
 //! same obstacle to the bees, so the difference to `mesh` is the cost of a moving mesh's
 //! pose), `moving` the ball also travelling 0.5 m along +X.

@@ -957,7 +957,7 @@ mod tests {
         for (rotation, translation) in [
             (glam::Quat::from_rotation_y(0.7), Vec3::new(1.0, 2.0, -0.5)),
             (
-                crate::shot::euler_deg(Vec3::new(30.0, 200.0, -45.0)),
+                crate::geometry::euler_deg(Vec3::new(30.0, 200.0, -45.0)),
                 Vec3::new(-3.0, 0.4, 2.0),
             ),
         ] {

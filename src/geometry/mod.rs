@@ -73,6 +73,13 @@ impl Rigid {
     }
 }
 
+/// Euler angles in degrees as a rotation: first about X, then Y, then Z, about world axes
+/// (R = Rz · Ry · Rx, Blender's 'XYZ'): the convention of every `rotation` in a shot.
+pub fn euler_deg(v: Vec3) -> Quat {
+    let r = v * (std::f32::consts::PI / 180.0);
+    Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x)
+}
+
 /// Where a point stands relative to an obstacle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceQuery {

@@ -13,7 +13,7 @@ mod resolve;
 pub mod schema;
 
 use crate::error::ShotError;
-pub use crate::geometry::Shape;
+pub use crate::geometry::{Shape, euler_deg};
 use crate::model::ParamValues;
 pub use crate::model::{Body, ModelKind, TargetKind, Variation};
 use glam::Vec3;
@@ -134,14 +134,6 @@ impl Obstacle {
 pub struct Placement {
     pub position: Vec3,
     pub rotation_deg: Vec3,
-}
-
-/// Euler angles in degrees (X first, then Y, then Z, about world axes) as a rotation.
-pub fn euler_deg(v: Vec3) -> glam::Quat {
-    let r = v * (std::f32::consts::PI / 180.0);
-    glam::Quat::from_rotation_z(r.z)
-        * glam::Quat::from_rotation_y(r.y)
-        * glam::Quat::from_rotation_x(r.x)
 }
 
 /// The value of keys (frame, value), sorted by frame, at a (fractional) frame: `mix`ed
