@@ -235,6 +235,8 @@ pub struct Simulation {
     /// Every target at the current substep.
     targets: Vec<TargetNow>,
     obstacles: Vec<Shape>,
+    /// Each moving obstacle's pose at the start of the current substep (`None`: static).
+    obstacles_before: Vec<Option<geometry::Rigid>>,
     lists: Vec<NeighbourList>,
     gathered: Vec<(f32, f32)>,
     agents: Vec<Neighbour>,
@@ -400,6 +402,7 @@ impl Simulation {
             .fold(0.0, f32::max);
         let mut sim = Simulation {
             frame: shot.frame_start,
+            obstacles_before: shot.obstacles.iter().map(|_| None).collect(),
             obstacles,
             shot,
             swarms,
@@ -523,10 +526,15 @@ impl Simulation {
         }
     }
 
-    /// Moves the moving obstacles to where they stand at time `t`.
-    fn update_obstacles(&mut self, t: f64) {
-        let frame = self.shot.frame_start as f64 + t * self.shot.fps;
-        place_obstacles(&mut self.obstacles, &self.shot, frame);
+    /// Moves the moving obstacles to where they stand at time `t + dt`, and notes where
+    /// they stood at `t` (their motion over the substep). Both from the keys, so a resumed
+    /// simulation moves them exactly as an uninterrupted one.
+    fn update_obstacles(&mut self, t: f64, dt: f64) {
+        let frame = |t: f64| self.shot.frame_start as f64 + t * self.shot.fps;
+        for (before, o) in self.obstacles_before.iter_mut().zip(&self.shot.obstacles) {
+            *before = o.pose_at(frame(t));
+        }
+        place_obstacles(&mut self.obstacles, &self.shot, frame(t + dt));
     }
 
     /// One integration step of `dt` seconds starting at time `t`.
@@ -540,7 +548,7 @@ impl Simulation {
         // must be clear of them then (the frame recorded after the last substep shows the
         // obstacles at that frame), so the contact guard pushes out a body a moving
         // obstacle has come onto.
-        self.update_obstacles(t + self.shot.dt());
+        self.update_obstacles(t, self.shot.dt());
         // Pass 0: every agent's neighbour record, and the grid over their positions.
         self.agents.resize(n, Neighbour::default());
         for (s, (swarm, rest)) in self.shot.swarms.iter().zip(
@@ -586,6 +594,7 @@ impl Simulation {
             seed: self.shot.seed,
             wind: self.shot.wind,
             obstacles: &self.obstacles,
+            obstacles_before: &self.obstacles_before,
             targets: &self.targets,
             max_body_radius: self.max_body_radius,
             agents: &self.agents,
