@@ -496,8 +496,8 @@ fn no_body_is_ever_inside_a_mesh_obstacle() {
 }
 
 /// A scene of one random closed blob that sweeps through the swarm on keys, turning as it
-/// goes (up to about 6 m/s and 720°/s), among insects of every model that sees obstacles
-/// move (all but `field`, which refuses it).
+/// goes (up to about 11 m/s and 2,900°/s about an axis), among insects of every model that
+/// sees obstacles move (all but `field`, which refuses it).
 fn moving_mesh_scene(case: u64, dir: &std::path::Path) -> String {
     let mut rng = Rng::new(2026, case, 23);
     let model = [
