@@ -7,8 +7,14 @@
 //! JSON line. Timings are wall-clock and vary with the machine and its load. With a last
 //! argument only that shot is simulated (no query timings): for counting instructions,
 //! which a loaded machine does not disturb, e.g.
-//! `valgrind --tool=callgrind --toggle-collect='*Simulation*advance*' target/release/deps/mesh_obstacle-* 10000 6 100000 mesh`
-//! and the same with `none`: the ratio of their instruction counts is the mesh's cost.
+//! `RAYON_NUM_THREADS=1 valgrind --tool=callgrind target/release/deps/mesh_obstacle-* 10000 8 100000 mesh`
+//! less the same run with 2 frames (loading left out; a `--toggle-collect` on the
+//! simulation's functions counts only the calling thread's share, as the steps run on
+//! rayon's worker thread), and
+//! the same with `none`: the ratio of the differences is the mesh's cost.
+//! `turning` is the same ball on keys turning it 90° about its centre over the shot (the
+//! same obstacle to the bees, so the difference to `mesh` is the cost of a moving mesh's
+//! pose), `moving` the ball also travelling 0.5 m along +X.
 
 use beeswarm::geometry::{self, Shape};
 use beeswarm::sim::Simulation;
@@ -84,11 +90,13 @@ fn main() {
     }
     let (bees, frames, triangles, only) = match &args[..] {
         [b, f, t] => (b, f, t, None),
-        [b, f, t, o] if ["none", "sphere", "mesh"].contains(&o.as_str()) => {
+        [b, f, t, o] if ["none", "sphere", "mesh", "turning", "moving"].contains(&o.as_str()) => {
             (b, f, t, Some(o.as_str()))
         }
         _ => {
-            eprintln!("usage: mesh_obstacle BEES FRAMES TRIANGLES [none|sphere|mesh]");
+            eprintln!(
+                "usage: mesh_obstacle BEES FRAMES TRIANGLES [none|sphere|mesh|turning|moving]"
+            );
             std::process::exit(2);
         }
     };
@@ -115,7 +123,7 @@ fn main() {
         "[[obstacle]]\ntype = \"mesh\"\nfile = \"ball.obj\"\nposition = [0, 1, 0]\n",
     ));
     let load_s = t.elapsed().as_secs_f64();
-    let Shape::Mesh { mesh } = &with_mesh.obstacles[0].shape else {
+    let Shape::Mesh { mesh, .. } = &with_mesh.obstacles[0].shape else {
         unreachable!()
     };
     let with_sphere = parse(&shot_src(
@@ -123,9 +131,20 @@ fn main() {
     ));
     let without = parse(&shot_src(""));
     if let Some(only) = only {
+        let keyed = |to: &str| {
+            parse(&shot_src(&format!(
+                "[[obstacle]]\ntype = \"mesh\"\nfile = \"ball.obj\"\nkeys = [{{ frame = 1, position = [0, 1, 0] }}, \
+                 {{ frame = {}, position = {to}, rotation = [0, 90, 0] }}]\n",
+                frames + 1
+            )))
+        };
+        let turning = keyed("[0, 1, 0]");
+        let moving = keyed("[0.5, 1, 0]");
         let shot = match only {
             "none" => &without,
             "sphere" => &with_sphere,
+            "turning" => &turning,
+            "moving" => &moving,
             _ => &with_mesh,
         };
         println!(

@@ -183,11 +183,16 @@ def _decompose(obj):
     return quat.to_matrix(), scale
 
 
-def mesh_obstacle(obj, depsgraph, file_name, node):
+def mesh_obstacle(obj, depsgraph, file_name, node, scene=None, frames=None):
     """(obstacle entry, (node, positions, triangles)) of any object that evaluates to a
     mesh: its evaluated geometry (modifiers applied) in world space, Y-up, metres,
     triangulated, for the node `node` of the shot's obstacle .glb `file_name`. A closed
-    mesh (every edge shared by two triangles) is a solid; any other is avoided as a shell."""
+    mesh (every edge shared by two triangles) is a solid; any other is avoided as a shell.
+
+    An object whose transform is animated (keyframes, drivers, constraints, an animated
+    parent), given the `scene` and its `frames`, moves: the .glb holds its mesh in its rest
+    pose (scaled, unrotated, at the origin) and the entry its `keys`, one per frame, from
+    `motion_keys`."""
     ev = obj.evaluated_get(depsgraph)
     try:
         me = ev.to_mesh()
@@ -208,7 +213,13 @@ def mesh_obstacle(obj, depsgraph, file_name, node):
         me.loop_triangles.foreach_get("vertices", tri)
     finally:
         ev.to_mesh_clear()
-    mw = np.array(obj.matrix_world, dtype=np.float64)
+    keys = None
+    if scene is not None and frames is not None and _is_animated(obj):
+        keys, scale = motion_keys(obj, scene, frames)
+        # The rest pose: the object's scale only; the keys turn and place it.
+        mw = np.diag([scale[0], scale[1], scale[2], 1.0])
+    else:
+        mw = np.array(obj.matrix_world, dtype=np.float64)
     world = co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
     shot = np.stack([world[:, 0], world[:, 2], -world[:, 1]], axis=1).astype(np.float32)
     if not np.all(np.isfinite(shot)):
@@ -220,7 +231,38 @@ def mesh_obstacle(obj, depsgraph, file_name, node):
     entry = {"type": "mesh", "name": obj.name, "file": file_name, "node": node}
     if not closed:
         entry["mode"] = "shell"
+    if keys is not None:
+        entry["keys"] = keys
     return entry, (node, shot, tri)
+
+
+def motion_keys(obj, scene, frames):
+    """(keys, scale) of an animated object: one shot key {frame, position, rotation} per
+    frame of `frames` (sampled from the evaluated scene, so keyframes, drivers, constraints
+    and parents all count), and its world scale, which must not change (a moving mesh
+    obstacle is rigid: UnsupportedShape otherwise). Euler angles are kept continuous from
+    frame to frame (a turn past 180° goes on to 190°, not back to −170°), so the shot's
+    linear interpolation between keys turns the way Blender did."""
+    current, sub = scene.frame_current, scene.frame_subframe
+    keys, scale, prev = [], None, None
+    try:
+        for f in range(frames[0], frames[1] + 1):
+            scene.frame_set(f)
+            rot, s = _decompose(obj)
+            if scale is None:
+                scale = s.copy()
+            elif max(abs(a - b) for a, b in zip(s, scale)) > 1e-5 * max(max(scale), 1e-12):
+                raise UnsupportedShape(
+                    f"'{obj.name}' changes scale at frame {f}; a moving mesh obstacle keeps "
+                    f"one scale: animate its location and rotation only")
+            r = C @ rot @ C_INV
+            e = r.to_euler("XYZ") if prev is None else r.to_euler("XYZ", prev)
+            prev = e
+            keys.append({"frame": f, "position": to_shot(obj.matrix_world.translation),
+                         "rotation": [_clean(math.degrees(a), 1e-6) for a in e]})
+    finally:
+        scene.frame_set(current, subframe=sub)
+    return keys, scale
 
 
 def obstacle_entry(obj, kind, warnings):
@@ -437,7 +479,7 @@ def build_shot(scene, settings, name=None):
                 while any(m[0] == node for m in meshes):
                     k += 1
                     node = f"{obj.name}_{k}"
-                entry, mesh = mesh_obstacle(obj, depsgraph, mesh_file, node)
+                entry, mesh = mesh_obstacle(obj, depsgraph, mesh_file, node, scene, frames)
                 meshes.append(mesh)
                 obstacles.append(entry)
             else:

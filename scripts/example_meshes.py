@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
-"""Writes the small meshes of examples/tree_and_fence.toml (examples/meshes/*.obj).
+"""Writes the small meshes of examples/tree_and_fence.toml and examples/swinging_branch.toml
+(examples/meshes/*.obj).
 
 tree.obj: a trunk, six branches and four crown blobs, each a closed, outward-wound piece
 (they overlap; beeswarm avoids their union), about 4,000 triangles.
 fence.obj: ten upright slats, single faces (open), avoided as a shell.
+branch.obj: a branch hanging from its pivot at the origin (a stem along -Y, two twigs and
+three leaf blobs), closed pieces, for a mesh that swings on keys.
 Metres, Y-up. Run from the repository root: python3 scripts/example_meshes.py
 """
 import math
@@ -119,8 +122,19 @@ def fence():
     return o
 
 
+def branch():
+    o = Obj()
+    cylinder(o, (0.0, 0.05, 0.0), (0.0, -1.2, 0.0), 0.03, 16, 6)
+    cylinder(o, (0.0, -0.5, 0.0), (0.35, -0.85, 0.05), 0.018, 10, 3)
+    cylinder(o, (0.0, -0.7, 0.0), (-0.3, -1.0, -0.05), 0.018, 10, 3)
+    for c, r in [((0.0, -1.25, 0.0), 0.16), ((0.38, -0.9, 0.05), 0.12), ((-0.33, -1.05, -0.05), 0.12)]:
+        blob(o, c, r, 12, 18)
+    return o
+
+
 if __name__ == "__main__":
     out = os.path.join(os.path.dirname(__file__), "..", "examples", "meshes")
     os.makedirs(out, exist_ok=True)
     tree().write(os.path.join(out, "tree.obj"), "A tree: trunk, branches and crown, closed pieces")
     fence().write(os.path.join(out, "fence.obj"), "A fence of ten slats, single faces")
+    branch().write(os.path.join(out, "branch.obj"), "A branch hanging from its pivot at the origin, closed pieces")

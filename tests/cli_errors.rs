@@ -1494,3 +1494,83 @@ fn a_velocity_database_is_read_and_its_errors_located() {
     let run = run_with("fastswarm", "good.db");
     assert_eq!(run.code, 0, "{}", run.stderr);
 }
+
+#[test]
+fn moving_meshes_refused_where_they_cannot_move() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(
+        p.join("m.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    let run_with = |swarm: &str, obstacle: &str| {
+        std::fs::write(
+            p.join("shot.toml"),
+            format!("[[swarm]]\ncount = 3\n{swarm}[[obstacle]]\n{obstacle}"),
+        )
+        .unwrap();
+        beeswarm(p, &["bake", "shot.toml", "--out", "out", "--format", "csv"])
+    };
+    let refused = |swarm: &str, obstacle: &str| {
+        let run = run_with(swarm, obstacle);
+        assert_eq!(run.code, 2, "{}", run.stderr);
+        assert!(!p.join("out").exists(), "nothing written");
+        run.stderr
+    };
+    let keys = "keys = [{ frame = 1, position = [3, 1, 0] }, { frame = 20, position = [-3, 1, 0], rotation = [0, 90, 0] }]\n";
+    let moving = format!("type = \"mesh\"\nfile = \"m.obj\"\n{keys}");
+    // The field model's path cost is built once from the obstacles: located at `keys`.
+    assert_says(
+        &refused("model = \"field\"\n", &moving),
+        &[
+            "shot.toml:7:8: key `obstacle[0].keys`",
+            "swarm[0] (\"swarm\") flies the `field` model",
+            "cannot move",
+            "remove `keys`",
+        ],
+    );
+    assert_says(
+        &refused("", &format!("{moving}position = [0, 1, 0]\n")),
+        &["key `obstacle[0].position`", "either `position` or `keys`"],
+    );
+    assert_says(
+        &refused(
+            "",
+            &format!("type = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.2\n{keys}"),
+        ),
+        &[
+            "key `obstacle[0].keys`",
+            "a sphere has no `keys`",
+            "only mesh obstacles move",
+        ],
+    );
+    assert_says(
+        &refused(
+            "",
+            "type = \"mesh\"\nfile = \"m.obj\"\nkeys = [{ frame = 5, position = [0, 2, 0] }, { frame = 2, position = [0, 2, 0] }]\n",
+        ),
+        &[
+            "key `obstacle[0].keys[1].frame`",
+            "increasing order, found 2 after 5",
+        ],
+    );
+    // A target's keys move a point: no rotation.
+    std::fs::write(
+        p.join("shot.toml"),
+        "[[swarm]]\ncount = 3\n[[target]]\nkeys = [{ frame = 1, position = [0, 1, 0], rotation = [0, 90, 0] }]\n",
+    )
+    .unwrap();
+    let run = beeswarm(p, &["check", "shot.toml"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_says(
+        &run.stderr,
+        &[
+            "key `target[0].keys[0].rotation`",
+            "a target's key has no `rotation`",
+        ],
+    );
+    // Every other model bakes it.
+    let run = run_with("model = \"zonal\"\n", &moving);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+}

@@ -238,7 +238,7 @@ pub fn summary(shot: &Shot) -> String {
             Shape::Capsule { .. } => "capsule".to_owned(),
             Shape::Cylinder { .. } => "cylinder".to_owned(),
             Shape::Plane { .. } => "plane".to_owned(),
-            Shape::Mesh { mesh } => {
+            Shape::Mesh { mesh, .. } => {
                 let (lo, hi) = mesh.bounds();
                 let how = match mesh.mode() {
                     MeshMode::Solid => format!("solid, {} closed piece(s)", mesh.piece_count()),
@@ -258,7 +258,11 @@ pub fn summary(shot: &Shot) -> String {
                 )
             }
         };
-        let _ = writeln!(s, "    {}: {kind}", o.name);
+        let motion = match o.keys.len() {
+            0 => String::new(),
+            n => format!(" (in its rest frame), moving on {n} key(s)"),
+        };
+        let _ = writeln!(s, "    {}: {kind}{motion}", o.name);
     }
     let _ = writeln!(s, "  {} target(s)", shot.targets.len());
     for t in &shot.targets {

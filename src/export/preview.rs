@@ -208,8 +208,9 @@ impl PreviewWriter {
             // A few obstacles are named; a field of stems is one entry.
             if list.len() <= 4 {
                 for o in list {
+                    let moving = if o.keys.is_empty() { "" } else { ", swept" };
                     legend.add(
-                        format!("{} ({})", o.name, shape_name(&o.shape)),
+                        format!("{} ({}{moving})", o.name, shape_name(&o.shape)),
                         Mark::Area { fill, edge },
                     );
                 }
@@ -266,7 +267,7 @@ impl PreviewWriter {
         let tg = self.targets.iter().flat_map(|t| t.keys.iter().map(|k| k.1));
         // Solid obstacles are in the frame too (a hive the bees never reach still shows),
         // planes are not: they are unbounded.
-        let solids = self.obstacles.iter().flat_map(|o| outline(&o.shape));
+        let solids = self.obstacles.iter().flat_map(swept_outline);
         for p in pts.chain(tg).chain(solids) {
             lo = lo.min(p);
             hi = hi.max(p);
@@ -324,7 +325,7 @@ impl PreviewWriter {
 
     fn draw_solids(&self, chart: &mut Chart2d, v: &View) -> DrawResult {
         for o in &self.obstacles {
-            let hull = convex_hull(outline(&o.shape).into_iter().map(|p| v.flat(p)).collect());
+            let hull = convex_hull(swept_outline(o).into_iter().map(|p| v.flat(p)).collect());
             if hull.len() < 3 {
                 continue;
             }
@@ -473,10 +474,36 @@ fn outline(s: &Shape) -> Vec<Vec3> {
         Shape::Plane { .. } => Vec::new(),
         // The vertices (of a large mesh every k-th triangle's, enough for its outline at
         // preview size).
-        Shape::Mesh { ref mesh } => {
+        Shape::Mesh { ref mesh, pose } => {
             let stride = mesh.triangle_count().div_ceil(20_000).max(1);
-            mesh.triangles().step_by(stride).flatten().collect()
+            let place = |p: Vec3| pose.map_or(p, |r| r.to_world(p));
+            mesh.triangles()
+                .step_by(stride)
+                .flatten()
+                .map(place)
+                .collect()
         }
+    }
+}
+
+/// The outline of an obstacle over the shot: a moving mesh's at every key (the hull of
+/// them is the area it sweeps, near enough for keys close together), else its outline.
+fn swept_outline(o: &Obstacle) -> Vec<Vec3> {
+    match &o.shape {
+        Shape::Mesh {
+            mesh,
+            pose: Some(_),
+        } => o
+            .keys
+            .iter()
+            .flat_map(|&(frame, _)| {
+                outline(&Shape::Mesh {
+                    mesh: mesh.clone(),
+                    pose: o.pose_at(frame),
+                })
+            })
+            .collect(),
+        shape => outline(shape),
     }
 }
 

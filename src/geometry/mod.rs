@@ -41,11 +41,43 @@ pub enum Shape {
         point: Vec3,
         normal: Vec3,
     },
-    /// A triangle mesh in world space (see [`mesh`]). Shared by every thread and every
-    /// copy of the shot through the `Arc`, freed with the last of them.
+    /// A triangle mesh (see [`mesh`]). Shared by every thread and every copy of the shot
+    /// through the `Arc`, freed with the last of them. `pose: None`: the mesh is built in
+    /// world space and never moves. `Some`: it is built in its rest frame and `pose`
+    /// places it in the world now (a keyframed obstacle; the world sets it each substep).
     Mesh {
         mesh: std::sync::Arc<mesh::Mesh>,
+        pose: Option<Rigid>,
     },
+}
+
+/// A rigid placement, rest frame → world: rotate about the rest frame's origin, then
+/// translate. Metres; `rotation` a unit quaternion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rigid {
+    pub rotation: Quat,
+    pub translation: Vec3,
+}
+
+impl Rigid {
+    /// A world point in the rest frame.
+    #[inline]
+    pub fn to_rest(&self, p: Vec3) -> Vec3 {
+        // The conjugate is the inverse of a unit quaternion.
+        self.rotation.conjugate() * (p - self.translation)
+    }
+    /// A rest-frame point in the world.
+    #[inline]
+    pub fn to_world(&self, p: Vec3) -> Vec3 {
+        self.rotation * p + self.translation
+    }
+}
+
+/// Euler angles in degrees as a rotation: first about X, then Y, then Z, about world axes
+/// (R = Rz · Ry · Rx, Blender's 'XYZ'): the convention of every `rotation` in a shot.
+pub fn euler_deg(v: Vec3) -> Quat {
+    let r = v * (std::f32::consts::PI / 180.0);
+    Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x)
 }
 
 /// Where a point stands relative to an obstacle.
@@ -114,7 +146,24 @@ pub fn signed_distance(shape: &Shape, p: Vec3) -> f32 {
 
 pub fn query(shape: &Shape, p: Vec3) -> SurfaceQuery {
     match *shape {
-        Shape::Mesh { ref mesh } => mesh.query(p),
+        Shape::Mesh {
+            ref mesh,
+            pose: None,
+        } => mesh.query(p),
+        // A moving mesh is asked in its rest frame, where its hierarchy and far-field
+        // grid were built; the answer is carried back (distances are unchanged by a
+        // rigid motion).
+        Shape::Mesh {
+            ref mesh,
+            pose: Some(pose),
+        } => {
+            let q = mesh.query(pose.to_rest(p));
+            SurfaceQuery {
+                distance: q.distance,
+                point: pose.to_world(q.point),
+                normal: pose.rotation * q.normal,
+            }
+        }
         Shape::Sphere { center, radius } => {
             let n = dir_or(p - center, Vec3::Y);
             SurfaceQuery {

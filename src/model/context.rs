@@ -101,7 +101,11 @@ pub struct Context<'a> {
     pub seed: u64,
     /// Constant wind velocity, m/s.
     pub wind: Vec3,
+    /// The obstacles where they stand at the end of this substep.
     pub obstacles: &'a [Shape],
+    /// Each moving obstacle's pose at the start of this substep, by obstacle (`None`:
+    /// static): with `obstacles`, its motion over the substep.
+    pub obstacles_before: &'a [Option<crate::geometry::Rigid>],
     pub targets: &'a [TargetNow],
     /// Largest body radius of any agent, m: bounds every contact distance.
     pub max_body_radius: f32,
@@ -132,6 +136,22 @@ impl Context<'_> {
             if d2 < r2 {
                 f(j as usize, pj, d2);
             }
+        }
+    }
+
+    /// The velocity over this substep, m/s, of the point of obstacle `k` that is at
+    /// `point` at the substep's end: where that point of the moving mesh was at the start,
+    /// carried to where it is. Zero for a static obstacle.
+    #[inline]
+    pub fn obstacle_point_velocity(&self, k: usize, point: Vec3) -> Vec3 {
+        match (&self.obstacles[k], self.obstacles_before.get(k)) {
+            (
+                Shape::Mesh {
+                    pose: Some(now), ..
+                },
+                Some(Some(before)),
+            ) if self.dt > 0.0 => (point - before.to_world(now.to_rest(point))) / self.dt,
+            _ => Vec3::ZERO,
         }
     }
 

@@ -151,8 +151,9 @@ pub struct SwarmSetup<'a> {
     pub bounds: Option<(Vec3, Vec3)>,
     /// Indices of the targets that attract this swarm.
     pub targets: Vec<usize>,
-    /// The shot's obstacles: what a model precomputes a field from once per shot (a
-    /// distance or path field), besides querying them each step through the `Context`.
+    /// The shot's obstacles where they stand at the first frame: what a model precomputes
+    /// a field from once per shot (a distance or path field; such a model sets
+    /// [`Model::STATIC_OBSTACLES`]), besides querying them each step through the `Context`.
     pub obstacles: &'a [Shape],
     /// The recorded velocity database a FASTSWARM swarm draws from (the shot's
     /// `database`); `None`: the shipped mosquito database. Other models ignore it.
@@ -222,6 +223,9 @@ pub trait Model: Sized + Send + Sync {
     /// inside its hive: `state` 3), so that the writers can hide it; the same agents as
     /// `Agent::hidden`. `None`: the model never hides one.
     const HIDDEN_STATE: Option<(&'static str, f32)> = None;
+    /// Whether the model builds something from the obstacles once per shot (a path cost
+    /// field) that would go stale if one moved: a shot refuses moving obstacles for it.
+    const STATIC_OBSTACLES: bool = false;
 
     fn new(setup: &SwarmSetup) -> Self;
 

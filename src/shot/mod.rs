@@ -13,7 +13,7 @@ mod resolve;
 pub mod schema;
 
 use crate::error::ShotError;
-pub use crate::geometry::Shape;
+pub use crate::geometry::{Shape, euler_deg};
 use crate::model::ParamValues;
 pub use crate::model::{Body, ModelKind, TargetKind, Variation};
 use glam::Vec3;
@@ -104,7 +104,60 @@ impl Region {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Obstacle {
     pub name: String,
+    /// Where the obstacle stands at the shot's first frame.
     pub shape: Shape,
+    /// Placement keys (frame, placement), sorted by frame, of a moving mesh obstacle
+    /// (whose `shape` then has a pose); empty for an obstacle that never moves.
+    pub keys: Vec<(f64, Placement)>,
+}
+
+impl Obstacle {
+    /// Where a moving obstacle stands at a (fractional) frame (`None` for a static one):
+    /// its keys interpolated as a target's.
+    pub fn pose_at(&self, frame: f64) -> Option<crate::geometry::Rigid> {
+        if self.keys.is_empty() {
+            return None;
+        }
+        let p = interpolate_keys(&self.keys, frame, |a, b, t| Placement {
+            position: a.position.lerp(b.position, t),
+            rotation_deg: a.rotation_deg.lerp(b.rotation_deg, t),
+        });
+        Some(crate::geometry::Rigid {
+            rotation: euler_deg(p.rotation_deg),
+            translation: p.position,
+        })
+    }
+}
+
+/// A keyed placement of a moving obstacle: where its rest frame's origin is (m) and how
+/// it is turned (Euler angles in degrees, X then Y then Z about world axes, as an
+/// obstacle's `rotation`). Angles are interpolated, not quaternions, so that keys from 0°
+/// to 360° turn the obstacle once round, as in Blender.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub position: Vec3,
+    pub rotation_deg: Vec3,
+}
+
+/// The value of keys (frame, value), sorted by frame, at a (fractional) frame: `mix`ed
+/// linearly between the two keys around it, held before the first and after the last.
+/// The one keyframe rule of a shot, for targets and moving obstacles alike.
+pub fn interpolate_keys<T: Copy>(keys: &[(f64, T)], frame: f64, mix: impl Fn(T, T, f32) -> T) -> T {
+    if frame <= keys[0].0 {
+        return keys[0].1;
+    }
+    for w in keys.windows(2) {
+        let ((f0, v0), (f1, v1)) = (w[0], w[1]);
+        if frame <= f1 {
+            let t = if f1 > f0 {
+                ((frame - f0) / (f1 - f0)) as f32
+            } else {
+                1.0
+            };
+            return mix(v0, v1, t);
+        }
+    }
+    keys[keys.len() - 1].1
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -139,22 +192,7 @@ pub struct Target {
 impl Target {
     /// Position at a (fractional) frame: linear between keys, held outside them.
     pub fn position_at(&self, frame: f64) -> Vec3 {
-        let k = &self.keys;
-        if frame <= k[0].0 {
-            return k[0].1;
-        }
-        for w in k.windows(2) {
-            let ((f0, p0), (f1, p1)) = (w[0], w[1]);
-            if frame <= f1 {
-                let t = if f1 > f0 {
-                    ((frame - f0) / (f1 - f0)) as f32
-                } else {
-                    1.0
-                };
-                return p0.lerp(p1, t);
-            }
-        }
-        k[k.len() - 1].1
+        interpolate_keys(&self.keys, frame, Vec3::lerp)
     }
 }
 

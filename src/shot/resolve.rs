@@ -456,8 +456,9 @@ pub fn resolve(src: &str, file: &Path, base: &Path) -> Result<Shot, ShotError> {
 
     let mut obstacles = Vec::new();
     for (i, ro) in raw.obstacle.iter().enumerate() {
-        obstacles.push(resolve_obstacle(&cx, i, ro, base)?);
+        obstacles.push(resolve_obstacle(&cx, i, ro, base, f0 as f64)?);
     }
+    check_moving_obstacles(&cx, &swarms, &obstacles)?;
     let mut targets = Vec::new();
     for (i, rt) in raw.target.iter().enumerate() {
         if rt.curve.is_some() || rt.samples.is_some() {
@@ -968,10 +969,55 @@ fn resolve_database(
         })
 }
 
-fn euler_deg(v: Vec3) -> Quat {
-    let r = v * (std::f32::consts::PI / 180.0);
-    // X first, then Y, then Z, about world axes.
-    Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x)
+/// Keys `keys = [{ frame, position, rotation }, ...]` at `prefix` (`target[0]`), in
+/// increasing frame order: (frame, position, rotation in degrees if the key has one). Only
+/// a moving obstacle's keys may turn (`rotating`).
+fn resolve_keys(
+    cx: &Ctx,
+    prefix: &str,
+    raw_keys: &[RawKey],
+    rotating: bool,
+) -> Result<Vec<(f64, Vec3, Option<Vec3>)>, ShotError> {
+    let k = |j: usize, key: &str| format!("{prefix}.keys[{j}].{key}");
+    let mut keys: Vec<(f64, Vec3, Option<Vec3>)> = Vec::new();
+    for (j, key) in raw_keys.iter().enumerate() {
+        let f = cx.required(&k(j, "frame"), &key.frame, "the key's frame number")?;
+        if !f.is_finite() {
+            return Err(cx.err(
+                &k(j, "frame"),
+                format!("expected a frame number, found {f}"),
+            ));
+        }
+        let p = cx.vec(
+            &k(j, "position"),
+            cx.required(
+                &k(j, "position"),
+                &key.position,
+                "the key's position [x, y, z]",
+            )?,
+        )?;
+        let rotation = match key.rotation {
+            Some(_) if !rotating => {
+                return Err(cx.hint(
+                    &k(j, "rotation"),
+                    "a target's key has no `rotation`",
+                    "a target is a point: its keys move it (frame, position)",
+                ));
+            }
+            Some(r) => Some(cx.vec(&k(j, "rotation"), r)?),
+            None => None,
+        };
+        if let Some(&(prev, ..)) = keys.last()
+            && f <= prev
+        {
+            return Err(cx.err(
+                &k(j, "frame"),
+                format!("expected key frames in increasing order, found {f} after {prev}"),
+            ));
+        }
+        keys.push((f, p, rotation));
+    }
+    Ok(keys)
 }
 
 fn resolve_obstacle(
@@ -979,6 +1025,7 @@ fn resolve_obstacle(
     i: usize,
     ro: &RawObstacle,
     base: &Path,
+    first_frame: f64,
 ) -> Result<Obstacle, ShotError> {
     let k = |key: &str| format!("obstacle[{i}].{key}");
     let kind = cx.required(
@@ -1029,6 +1076,7 @@ fn resolve_obstacle(
             "position",
             "rotation",
             "scale",
+            "keys",
         ],
         _ => &["point", "normal"],
     };
@@ -1048,13 +1096,49 @@ fn resolve_obstacle(
         ("position", ro.position.is_some()),
         ("scale", ro.scale.is_some()),
         ("node", ro.node.is_some()),
+        ("keys", ro.keys.is_some()),
     ];
     if let Some((key, _)) = present.iter().find(|(key, p)| *p && !allowed.contains(key)) {
         return Err(cx.hint(
             &k(key),
             format!("a {kind} has no `{key}`"),
-            format!("a {kind} takes {}", allowed.join(", ")),
+            if *key == "keys" {
+                "only mesh obstacles move: type = \"mesh\" with keys = [{ frame, position, rotation }, ...]".to_owned()
+            } else {
+                format!("a {kind} takes {}", allowed.join(", "))
+            },
         ));
+    }
+    // A moving mesh: its keys, in place of `position` and `rotation`.
+    let mut keys = Vec::new();
+    if let Some(raw) = &ro.keys {
+        for key in ["position", "rotation"] {
+            if present.iter().any(|(k2, p)| *p && *k2 == key) {
+                return Err(cx.hint(
+                    &k(key),
+                    format!("a moving mesh has either `{key}` or `keys`, not both"),
+                    format!("give each key its {key}: keys = [{{ frame = 1, position = [0, 1, 0], rotation = [0, 0, 0] }}, ...]"),
+                ));
+            }
+        }
+        if raw.is_empty() {
+            return Err(cx.err(
+                &k("keys"),
+                "expected at least one key { frame, position, rotation }",
+            ));
+        }
+        keys = resolve_keys(cx, &format!("obstacle[{i}]"), raw, true)?
+            .into_iter()
+            .map(|(f, position, rotation)| {
+                (
+                    f,
+                    Placement {
+                        position,
+                        rotation_deg: rotation.unwrap_or(Vec3::ZERO),
+                    },
+                )
+            })
+            .collect();
     }
     let shape = match kind {
         "sphere" => Shape::Sphere {
@@ -1094,9 +1178,25 @@ fn resolve_obstacle(
                 * 0.5,
             rotation: rotation()?,
         },
-        "mesh" => Shape::Mesh {
-            mesh: resolve_mesh(cx, i, ro, base, rotation()?)?,
-        },
+        "mesh" => {
+            let mut obstacle = Obstacle {
+                name: name.clone(),
+                shape: Shape::Plane {
+                    point: Vec3::ZERO,
+                    normal: Vec3::Y,
+                },
+                keys,
+            };
+            // A moving mesh is built in its rest frame (scaled only) and placed by its
+            // pose; a static one is built where it stands.
+            let moving = !obstacle.keys.is_empty();
+            let placement = if moving { Quat::IDENTITY } else { rotation()? };
+            obstacle.shape = Shape::Mesh {
+                mesh: resolve_mesh(cx, i, ro, base, placement, moving)?,
+                pose: obstacle.pose_at(first_frame),
+            };
+            return Ok(obstacle);
+        }
         _ => {
             let point = cx.vec(&k("point"), ro.point.unwrap_or([0.0; 3]))?;
             let n = cx.vec(&k("normal"), ro.normal.unwrap_or([0.0, 1.0, 0.0]))?;
@@ -1109,7 +1209,11 @@ fn resolve_obstacle(
             }
         }
     };
-    Ok(Obstacle { name, shape })
+    Ok(Obstacle {
+        name,
+        shape,
+        keys: Vec::new(),
+    })
 }
 
 /// A `type = "mesh"` obstacle: the file read, placed in the world (scale, then
@@ -1121,6 +1225,7 @@ fn resolve_mesh(
     ro: &RawObstacle,
     base: &Path,
     rotation: Quat,
+    moving: bool,
 ) -> Result<Arc<Mesh>, ShotError> {
     let k = |key: &str| format!("obstacle[{i}].{key}");
     let file = cx.required(
@@ -1150,7 +1255,12 @@ fn resolve_mesh(
             )? as f32,
         },
     };
-    let position = cx.vec(&k("position"), ro.position.unwrap_or([0.0; 3]))?;
+    // A moving mesh's keys place it.
+    let position = if moving {
+        Vec3::ZERO
+    } else {
+        cx.vec(&k("position"), ro.position.unwrap_or([0.0; 3]))?
+    };
     let scale = cx.size(&k("scale"), ro.scale.unwrap_or([1.0; 3]))?;
     let path = base.join(&file);
     let located = |e: mesh_file::FileError| -> ShotError {
@@ -1355,33 +1465,13 @@ fn resolve_target(
         .name
         .clone()
         .unwrap_or_else(|| format!("{kind_name}_{}", i + 1));
-    let mut keys = Vec::new();
-    if let Some(raw_keys) = &rt.keys {
-        for (j, key) in raw_keys.iter().enumerate() {
-            let f = cx.required(
-                &k(&format!("keys[{j}].frame")),
-                &key.frame,
-                "the key's frame number",
-            )?;
-            let p = cx.vec(
-                &k(&format!("keys[{j}].position")),
-                cx.required(
-                    &k(&format!("keys[{j}].position")),
-                    &key.position,
-                    "the key's position [x, y, z]",
-                )?,
-            )?;
-            if let Some(&(prev, _)) = keys.last()
-                && f <= prev
-            {
-                return Err(cx.err(
-                    &k(&format!("keys[{j}].frame")),
-                    format!("expected key frames in increasing order, found {f} after {prev}"),
-                ));
-            }
-            keys.push((f, p));
-        }
-    }
+    let mut keys: Vec<(f64, Vec3)> = match &rt.keys {
+        Some(raw) => resolve_keys(cx, &format!("target[{i}]"), raw, false)?
+            .into_iter()
+            .map(|(f, p, _)| (f, p))
+            .collect(),
+        None => Vec::new(),
+    };
     match (rt.position, keys.is_empty()) {
         (Some(p), true) => keys.push((0.0, cx.vec(&k("position"), p)?)),
         (Some(_), false) => {
@@ -1516,6 +1606,38 @@ fn with_article(word: &str) -> String {
     format!("{} {word}", if vowel { "an" } else { "a" })
 }
 
+/// A model that builds a field from the obstacles once per shot (the `field` model's
+/// path cost, paper 001 Eq. 4) would steer by a stale field if one moved: refused, at the
+/// first moving obstacle's `keys`.
+fn check_moving_obstacles(
+    cx: &Ctx,
+    swarms: &[Swarm],
+    obstacles: &[Obstacle],
+) -> Result<(), ShotError> {
+    let Some(i) = obstacles.iter().position(|o| !o.keys.is_empty()) else {
+        return Ok(());
+    };
+    for (si, s) in swarms.iter().enumerate() {
+        let static_only = crate::model::with_model!(s.model, M => {
+            <M as crate::model::Model>::STATIC_OBSTACLES
+        });
+        if static_only {
+            return Err(cx.hint(
+                &format!("obstacle[{i}].keys"),
+                format!(
+                    "swarm[{si}] (\"{}\") flies the `{}` model, which builds its path cost field \
+                     from the obstacles once per shot, so an obstacle cannot move in its shot",
+                    s.name,
+                    s.model.name()
+                ),
+                "remove `keys` (place the mesh with `position` and `rotation`), or give the \
+                 swarm a model that sees obstacles move (bee, zonal, boids, ...)",
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A spawn region that lies wholly inside obstacles would trap every bee.
 fn check_spawn_regions(cx: &Ctx, shot: &Shot) -> Result<(), ShotError> {
     for (i, s) in shot.swarms.iter().enumerate() {
@@ -1629,7 +1751,7 @@ mod tests {
         let src = "[[swarm]]\ncount = 2\n[[obstacle]]\ntype = \"mesh\"\nfile = \"t.obj\"\n";
         let load = || super::super::parse(src, &dir.path().join("s.toml"), dir.path()).unwrap();
         let mesh_of = |s: &crate::shot::Shot| match &s.obstacles[0].shape {
-            Shape::Mesh { mesh } => mesh.clone(),
+            Shape::Mesh { mesh, .. } => mesh.clone(),
             other => panic!("{other:?}"),
         };
         let a = load();

@@ -114,6 +114,9 @@ pub struct RawObstacle {
     pub thickness: Option<f64>,
     pub position: Option<V3>,
     pub scale: Option<V3>,
+    /// Mesh obstacles: placement keys (frame, position, rotation) instead of `position`
+    /// and `rotation`: the mesh moves.
+    pub keys: Option<Vec<RawKey>>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]
@@ -143,6 +146,8 @@ pub struct RawTarget {
 pub struct RawKey {
     pub frame: Option<f64>,
     pub position: Option<V3>,
+    /// Moving mesh obstacles only: Euler angles in degrees, as an obstacle's `rotation`.
+    pub rotation: Option<V3>,
 }
 
 #[derive(Deserialize, Debug, Default, Clone)]

@@ -247,6 +247,8 @@ pub struct Simulation {
     /// Every target at the current substep.
     targets: Vec<TargetNow>,
     obstacles: Vec<Shape>,
+    /// Each moving obstacle's pose at the start of the current substep (`None`: static).
+    obstacles_before: Vec<Option<geometry::Rigid>>,
     lists: Vec<NeighbourList>,
     gathered: Vec<(f32, f32)>,
     agents: Vec<Neighbour>,
@@ -388,7 +390,10 @@ fn starts_inside(
 impl Simulation {
     pub fn new(shot: &Shot) -> Self {
         let shot = shot.clone();
-        let obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape.clone()).collect();
+        let mut obstacles: Vec<Shape> = shot.obstacles.iter().map(|o| o.shape.clone()).collect();
+        // The shot places moving meshes at its file's first frame; `--frames` may start
+        // elsewhere.
+        place_obstacles(&mut obstacles, &shot, shot.frame_start as f64);
         let mut swarms: Vec<Box<dyn Swarm>> = Vec::with_capacity(shot.swarms.len());
         let mut first = 0;
         for (si, s) in shot.swarms.iter().enumerate() {
@@ -465,6 +470,7 @@ impl Simulation {
             .fold(0.0, f32::max);
         let mut sim = Simulation {
             frame: shot.frame_start,
+            obstacles_before: shot.obstacles.iter().map(|_| None).collect(),
             obstacles,
             shot,
             swarms,
@@ -602,6 +608,17 @@ impl Simulation {
         }
     }
 
+    /// Moves the moving obstacles to where they stand at time `t + dt`, and notes where
+    /// they stood at `t` (their motion over the substep). Both from the keys, so a resumed
+    /// simulation moves them exactly as an uninterrupted one.
+    fn update_obstacles(&mut self, t: f64, dt: f64) {
+        let frame = |t: f64| self.shot.frame_start as f64 + t * self.shot.fps;
+        for (before, o) in self.obstacles_before.iter_mut().zip(&self.shot.obstacles) {
+            *before = o.pose_at(frame(t));
+        }
+        place_obstacles(&mut self.obstacles, &self.shot, frame(t + dt));
+    }
+
     /// One integration step of `dt` seconds starting at time `t`.
     fn step(&mut self, t: f64, dt: f32) {
         let n = self.shot.bee_count();
@@ -609,6 +626,11 @@ impl Simulation {
             return;
         }
         self.update_targets(t);
+        // Obstacles where they stand at the end of this step: the positions it makes
+        // must be clear of them then (the frame recorded after the last substep shows the
+        // obstacles at that frame), so the contact guard pushes out a body a moving
+        // obstacle has come onto.
+        self.update_obstacles(t, self.shot.dt());
         // Pass 0: every agent's neighbour record, and the grid over their positions.
         self.agents.resize(n, Neighbour::default());
         self.hidden.resize(n, false);
@@ -666,6 +688,7 @@ impl Simulation {
             seed: self.shot.seed,
             wind: self.shot.wind,
             obstacles: &self.obstacles,
+            obstacles_before: &self.obstacles_before,
             targets: &self.targets,
             max_body_radius: self.max_body_radius,
             agents: &self.agents,
@@ -745,6 +768,20 @@ impl Simulation {
             id += swarm.len() as u64;
         }
         self.record = rec;
+    }
+}
+
+/// Puts the moving obstacles among `shapes` (the shot's, in order) where they stand at a
+/// (fractional) frame.
+fn place_obstacles(shapes: &mut [Shape], shot: &Shot, frame: f64) {
+    for (shape, o) in shapes.iter_mut().zip(&shot.obstacles) {
+        if let Shape::Mesh {
+            pose: Some(pose), ..
+        } = shape
+            && let Some(now) = o.pose_at(frame)
+        {
+            *pose = now;
+        }
     }
 }
 

@@ -97,6 +97,8 @@ pub struct FieldModel {
 
 impl Model for FieldModel {
     type Agent = Insect;
+    // The cost field (Eq. 4) and the boundary walls are built from the obstacles once.
+    const STATIC_OBSTACLES: bool = true;
     const INFO: ModelInfo = ModelInfo {
         name: "field",
         summary: "Paper 001 (Wang et al. 2014): a divergence-free curl-noise field with a \

@@ -178,9 +178,17 @@ impl Model for ZonalModel {
         };
         if self.orca {
             let look = ri + self.max_speed * self.time_horizon;
-            for q in cx.obstacle_queries(p) {
+            for (k, q) in cx.obstacle_queries(p).enumerate() {
                 if q.distance < look {
-                    planes.push(orca::obstacle_plane(q.normal, q.distance, ri, times));
+                    // A moving mesh's surface coming at the insect moves the plane with it.
+                    let surface_speed = cx.obstacle_point_velocity(k, q.point).dot(q.normal);
+                    planes.push(orca::obstacle_plane(
+                        q.normal,
+                        q.distance,
+                        ri,
+                        surface_speed,
+                        times,
+                    ));
                 }
             }
         }

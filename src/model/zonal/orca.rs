@@ -143,19 +143,31 @@ pub fn agent_plane(
     }
 }
 
-/// The plane of a static obstacle seen as its tangent half-space: the closest surface point
-/// is `distance` metres away along `-outward` (the obstacle's outward normal there), and a
+/// The plane of an obstacle seen as its tangent half-space: the closest surface point is
+/// `distance` metres away along `-outward` (the obstacle's outward normal there), and a
 /// body of radius `radius` may approach it no faster than to touch it after `time_horizon`
 /// seconds; a body already closer than `radius` must leave within one step `dt`. For the
 /// convex shapes of a shot the tangent half-space holds the whole obstacle, so this is
-/// conservative.
-pub fn obstacle_plane(outward: Vec3, distance: f32, radius: f32, times: Times) -> Plane {
+/// conservative. `surface_speed` is the surface's own speed along `outward` (a moving mesh
+/// coming at the body: > 0; 0 for a static obstacle): the approach is measured relative to
+/// it, so the body must also get out of the surface's way.
+pub fn obstacle_plane(
+    outward: Vec3,
+    distance: f32,
+    radius: f32,
+    surface_speed: f32,
+    times: Times,
+) -> Plane {
     let gap = distance - radius;
-    let min_normal_speed = if gap >= 0.0 {
+    let mut min_normal_speed = if gap >= 0.0 {
         -gap / times.horizon
     } else {
         -gap / times.dt
     };
+    // Only a moving surface shifts the plane (a static one keeps its bits exactly).
+    if surface_speed != 0.0 {
+        min_normal_speed += surface_speed;
+    }
     Plane {
         point: outward * min_normal_speed,
         normal: outward,
@@ -466,12 +478,30 @@ mod tests {
             horizon: 2.0,
             dt: 0.02,
         };
-        let wall = obstacle_plane(Vec3::Y, 1.1, 0.1, times);
+        let wall = obstacle_plane(Vec3::Y, 1.1, 0.1, 0.0, times);
         let (v, _) = solve(&[wall], 5.0, -Vec3::Y * 3.0);
         assert!((v.y + 0.5).abs() < 1e-5, "{v}");
         // Inside by 5 cm: leaves within one step.
-        let inside = obstacle_plane(Vec3::Y, 0.05, 0.1, times);
+        let inside = obstacle_plane(Vec3::Y, 0.05, 0.1, 0.0, times);
         let (v, _) = solve(&[inside], 5.0, Vec3::ZERO);
         assert!((v.y - 2.5).abs() < 1e-4, "{v}");
+    }
+
+    #[test]
+    fn a_wall_coming_at_an_agent_makes_it_back_away_at_the_wall_speed_and_more() {
+        let times = Times {
+            horizon: 2.0,
+            dt: 0.02,
+        };
+        // 1 m of gap, the wall coming at 1.5 m/s: at least 1.5 − 1/2 = 1 m/s away from it,
+        // so the gap closes no faster than to touch at the horizon.
+        let wall = obstacle_plane(Vec3::Y, 1.1, 0.1, 1.5, times);
+        let (v, ok) = solve(&[wall], 5.0, Vec3::new(0.3, 0.0, 0.0));
+        assert!(ok);
+        assert!((v.y - 1.0).abs() < 1e-5 && (v.x - 0.3).abs() < 1e-5, "{v}");
+        // Moving away at 1 m/s: the agent may follow it faster than to a static wall.
+        let away = obstacle_plane(Vec3::Y, 1.1, 0.1, -1.0, times);
+        let (v, _) = solve(&[away], 5.0, -Vec3::Y * 3.0);
+        assert!((v.y + 1.5).abs() < 1e-5, "{v}");
     }
 }
