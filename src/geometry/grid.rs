@@ -21,6 +21,11 @@
 
 use glam::{IVec3, Vec3, Vec4};
 
+/// A crowd query first looks for its k nearest within this multiple of the distance that
+/// holds k at the local density, and then within `RETRY_MARGIN` times that.
+const GUESS_MARGIN: f32 = 1.12;
+const RETRY_MARGIN: f32 = 1.3;
+
 /// Candidates tested together.
 const LANES: usize = 4;
 use rayon::prelude::*;
@@ -278,19 +283,22 @@ impl Grid {
             // A crowd: first a walk out to a guess of the k-th neighbour's distance from
             // the local density, which bounds the rows walked and the candidates offered
             // from the start. Finding k within the guess proves them the k nearest;
-            // otherwise (rare: the guess has a margin) the walk is redone to the radius.
+            // otherwise the walk is redone a little further, then to the radius.
             // The guess is a fixed function of the grid and p's cell, so the answer and
             // its order stay a fixed function of p and the grid.
             let guess = self.kth_distance_guess(c, k);
-            if guess < radius {
-                best.bound = guess * guess;
-                self.walk(p, c, guess, &scan, &mut best);
+            for reach in [guess, guess * RETRY_MARGIN] {
+                if reach >= radius {
+                    break;
+                }
+                best.bound = reach * reach;
+                self.walk(p, c, reach, &scan, &mut best);
                 if best.len == best.k {
                     return best.len;
                 }
                 best.len = 0;
-                best.bound = radius * radius;
             }
+            best.bound = radius * radius;
             self.walk(p, c, radius, &scan, &mut best);
         }
         best.len
@@ -298,8 +306,10 @@ impl Grid {
 
     /// The distance within which a query in cell `c` should find `k` points, from the
     /// points in the (up to) 27 cells around it taken as a uniform density, with a margin
-    /// of 1.25: in a uniform crowd fewer than k lie within it about once in a thousand
-    /// queries (Poisson with mean 1.25³ k = 31 for k = 16).
+    /// of `GUESS_MARGIN`: in a uniform crowd fewer than k lie within it in about 8 % of
+    /// queries (Poisson with mean 1.12³ k = 22.5 for k = 16), which then walk again out to
+    /// 1.3 times as far. A wider margin (1.25) fails once in a thousand queries but offers
+    /// every query more candidates: 4 % more instructions (callgrind, 100,000 per m³).
     fn kth_distance_guess(&self, c: IVec3, k: usize) -> f32 {
         let d = self.dims;
         let reach = IVec3::new(self.split, 1, 1);
@@ -320,7 +330,7 @@ impl Grid {
         // (3 k / (4 π ρ))^(1/3) with ρ = count / (cells · cell³), in whole cubic cells.
         let cells = (hi - lo + IVec3::ONE).element_product() as f32 / self.split as f32;
         let r = (3.0 * k as f32 * cells / (4.0 * std::f32::consts::PI * count as f32)).cbrt();
-        1.25 * r * self.cell
+        GUESS_MARGIN * r * self.cell
     }
 
     fn walk_cube(&self, p: Vec3, c: IVec3, scan: &Scan, best: &mut Nearest) {
