@@ -139,6 +139,12 @@ impl Grid {
         (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize
     }
 
+    /// Every point's index, cell by cell (rows of cells along x, in increasing index order
+    /// within a cell): queries run in this order share the rows they read.
+    pub fn order(&self) -> &[u32] {
+        &self.items
+    }
+
     /// The cell edge, m.
     pub fn cell(&self) -> f32 {
         self.cell
