@@ -32,12 +32,19 @@ struct Runner<M: Model> {
     /// Recording buffers, reused every frame: attitudes, and channel values agent by agent.
     poses: Vec<Pose>,
     values: Vec<f32>,
+    /// Gather pass buffers, reused every substep: this swarm's agents in grid order, where
+    /// each of them stands in it, and the lists and sums in that order.
+    order: Vec<u32>,
+    rank: Vec<u32>,
+    gathered: Vec<(NeighbourList, (f32, f32))>,
 }
 
 /// What the gather pass reads of the world.
 #[derive(Clone, Copy)]
 struct Gather<'a> {
     grid: &'a Grid,
+    /// Every agent's global index, in the grid's cell order.
+    order: &'a [u32],
     agents: &'a [Neighbour],
     targets: &'a [TargetNow],
     max_body_radius: f32,
@@ -51,7 +58,7 @@ trait Swarm: Send + Sync {
     /// now (`Agent::hidden`: no one's neighbour) (pass 0).
     fn neighbour_records(&self, out: &mut [Neighbour], hidden: &mut [bool], mass: f32, radius: f32);
     /// Lists each agent's neighbours and runs the model's gather pass (pass 1).
-    fn gather(&self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]);
+    fn gather(&mut self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]);
     /// Steps every agent into the second buffer and swaps (pass 2).
     fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     fn reach(&self) -> f32;
@@ -101,49 +108,82 @@ where
             });
     }
 
-    fn gather(&self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]) {
+    fn gather(&mut self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]) {
         let Gather {
             grid,
+            order,
             agents,
             targets,
             max_body_radius,
             cancel,
         } = *w;
-        let m = &self.model;
-        let start = self.start;
         if !self.lists_neighbours() {
             lists.iter_mut().for_each(NeighbourList::clear);
             return;
         }
-        lists
-            .par_iter_mut()
-            .zip(gathered.par_iter_mut())
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(k, (list, g))| {
+        let (m, start, n) = (&self.model, self.start, self.agents.len());
+        // Agents are queried in the grid's cell order, not by index: neighbouring queries
+        // then read the same rows of the grid and the same neighbours, which stay in cache
+        // (a hundred thousand agents' grid and records do not). Each query is a fixed
+        // function of its agent and the grid, so the order changes no result.
+        self.order.clear();
+        if start == 0 && order.len() == n {
+            self.order.extend_from_slice(order);
+        } else {
+            let range = start as u32..(start + n) as u32;
+            self.order.extend(
+                order
+                    .iter()
+                    .filter(|i| range.contains(i))
+                    .map(|&i| i - start as u32),
+            );
+        }
+        self.rank.clear();
+        self.rank.resize(n, u32::MAX);
+        for (t, &k) in self.order.iter().enumerate() {
+            self.rank[k as usize] = t as u32;
+        }
+        // Agents the grid leaves out (bees inside their hive) are queried too, after the
+        // others, in index order: every agent gets its list and sums, as before the order.
+        if self.order.len() < n {
+            for k in 0..n {
+                if self.rank[k] == u32::MAX {
+                    self.rank[k] = self.order.len() as u32;
+                    self.order.push(k as u32);
+                }
+            }
+        }
+        self.gathered.clear();
+        self.gathered
+            .par_extend(self.order.par_iter().with_min_len(256).map(|&k| {
+                let mut list = NeighbourList::default();
                 // Cancelled: the rest of this pass is skipped (the state is abandoned).
                 if cancel.load(Ordering::Relaxed) {
-                    return;
+                    return (list, (0.0, 0.0));
                 }
-                let i = start + k;
+                let i = start + k as usize;
                 let me = &agents[i];
                 let ri = me.radius;
                 list.fill(grid, me.pos, m.reach() + ri + max_body_radius, i);
-                let mut sum = 0.0;
-                if M::GATHERS {
-                    // The agent's own term, then its neighbours'.
-                    sum += m.gather_term(ri, me, 0.0);
-                    for &j in list.indices() {
-                        let o = &agents[j as usize];
-                        sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
-                    }
+                if !M::GATHERS {
+                    return (list, (0.0, 0.0));
                 }
-                *g = if M::GATHERS {
-                    m.gather_finish(targets, me.pos, ri, sum)
-                } else {
-                    (0.0, 0.0)
-                };
-            });
+                // The agent's own term, then its neighbours'.
+                let mut sum = m.gather_term(ri, me, 0.0);
+                for &j in list.indices() {
+                    let o = &agents[j as usize];
+                    sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
+                }
+                (list, m.gather_finish(targets, me.pos, ri, sum))
+            }));
+        // Back into index order.
+        let sorted = &self.gathered;
+        lists
+            .par_iter_mut()
+            .zip(gathered.par_iter_mut())
+            .zip(self.rank.par_iter())
+            .with_min_len(1024)
+            .for_each(|((list, g), &t)| (*list, *g) = sorted[t as usize]);
     }
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
@@ -430,6 +470,9 @@ impl Simulation {
                     start: first,
                     poses: Vec::new(),
                     values: Vec::new(),
+                    order: Vec::new(),
+                    rank: Vec::new(),
+                    gathered: Vec::new(),
                 })
             }));
             first += s.count;
@@ -665,6 +708,7 @@ impl Simulation {
         self.gathered.resize(n, (0.0, 0.0));
         let shared = Gather {
             grid: &self.grid,
+            order: self.grid.order(),
             agents: &self.agents,
             targets: &self.targets,
             max_body_radius: self.max_body_radius,
@@ -672,7 +716,7 @@ impl Simulation {
         };
         let per_swarm =
             split(&mut self.lists, &self.swarms).zip(split(&mut self.gathered, &self.swarms));
-        for (swarm, (lists, gathered)) in self.swarms.iter().zip(per_swarm) {
+        for (swarm, (lists, gathered)) in self.swarms.iter_mut().zip(per_swarm) {
             swarm.gather(&shared, lists, gathered);
         }
         for (a, &(d, p)) in self.agents.iter_mut().zip(&self.gathered) {
@@ -789,7 +833,7 @@ fn place_obstacles(shapes: &mut [Shape], shot: &Shot, frame: f64) {
 fn split<'a, T>(
     mut all: &'a mut [T],
     swarms: &[Box<dyn Swarm>],
-) -> impl Iterator<Item = &'a mut [T]> {
+) -> impl Iterator<Item = &'a mut [T]> + use<'a, T> {
     let lens: Vec<usize> = swarms.iter().map(|s| s.len()).collect();
     lens.into_iter().map(move |n| {
         let (head, tail) = std::mem::take(&mut all).split_at_mut(n);
