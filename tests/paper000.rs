@@ -105,10 +105,48 @@ fn fig5_bees_fly_smooth_zigzags_where_curl_noise_turns_abruptly() {
     assert!(bw * 3.0 < cw, "turn rate bees {bw} curl {cw}");
     assert!(ba * 3.0 < ca, "angular acceleration bees {ba} curl {ca}");
     // The zigzag: the bees' heading swings with the body's roll oscillation (Eq. 4, period
-    // 2 × 91.775 time units of 5 ms: 1.09 Hz).
-    let roll_hz = 1.0 / (beeswarm::model::bee::oscillation::ROLL_PERIOD * 0.005);
+    // 2 × 91.775 time units of the preset's `oscillation_time_unit`).
+    let unit = beeswarm::model::BeeParams::nest().oscillation_time_unit;
+    let roll_hz = 1.0 / (beeswarm::model::bee::oscillation::ROLL_PERIOD * unit);
     assert!(
         (peak - roll_hz).abs() < 0.25 * roll_hz,
         "yaw-rate peak {peak} Hz, roll {roll_hz} Hz"
     );
+}
+
+#[test]
+fn fig1a_a_lone_bee_bobs_and_sways_visibly_at_the_paper_s_frequencies() {
+    let example = "paper000_fig1a_oscillation.toml";
+    let swarms = bake(example);
+    let f = &swarms["bee"];
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(example);
+    let length = beeswarm::shot::load(&path).unwrap().swarms[0].bee.length as f64;
+    let p: Vec<_> = f.positions().iter().map(|fr| fr[0]).collect();
+    let (bob, sway) = common::bob_and_sway_series(&p, f.fps());
+    let peak = |x: &[f64]| collective::peak_frequency(&collective::power_spectrum(x, f.fps()));
+    let (bob_hz, sway_hz) = (peak(&bob).unwrap(), peak(&sway).unwrap());
+    let (bob_bl, sway_bl) = (common::rms(&bob) / length, common::rms(&sway) / length);
+    let unit = beeswarm::model::BeeParams::nest().oscillation_time_unit;
+    let pitch_hz = 1.0 / (beeswarm::model::bee::oscillation::PITCH_PERIOD * unit);
+    let roll_hz = 1.0 / (beeswarm::model::bee::oscillation::ROLL_PERIOD * unit);
+    println!(
+        "Fig. 1a: bob {bob_bl:.3} body lengths rms at {bob_hz:.2} Hz (Eq. 3: {pitch_hz:.2} Hz), \
+         sway {sway_bl:.3} body lengths rms at {sway_hz:.2} Hz (Eq. 4: {roll_hz:.2} Hz), at {} fps",
+        f.fps()
+    );
+    // The bob follows the pitch of Eq. 3 and the sway the roll of Eq. 4, each sampled at
+    // four or more frames per cycle at the shot's 24 fps, so both read on screen.
+    let bin = f.fps() / bob.len().next_power_of_two() as f64;
+    assert!((bob_hz - pitch_hz).abs() <= 1.5 * bin, "bob at {bob_hz} Hz");
+    assert!(
+        (sway_hz - roll_hz).abs() <= 1.5 * bin,
+        "sway at {sway_hz} Hz"
+    );
+    assert!(pitch_hz * 4.0 <= f.fps() && roll_hz * 4.0 <= f.fps());
+    // Visible, not wild: about a tenth of a body length of bob, under one and a half body
+    // lengths of sway (docs/model.md, Eqs. 3–4).
+    assert!((0.07..0.2).contains(&bob_bl), "bob {bob_bl} body lengths");
+    assert!((0.4..1.5).contains(&sway_bl), "sway {sway_bl} body lengths");
 }

@@ -121,6 +121,8 @@ pub struct BeeModel {
     surface_speed_distance: f32,
     arrival_speed: f32,
     time_unit: f64,
+    /// Speed of Eq. 2's lift when it is the weight-bearing wing speed; None: the air speed.
+    wing_speed: Option<f32>,
     stiffness: f32,
     mass: f32,
     wing_area: f32,
@@ -166,6 +168,13 @@ impl Model for BeeModel {
             surface_speed_distance: p.surface_speed_distance as f32,
             arrival_speed: p.arrival_speed as f32,
             time_unit: p.oscillation_time_unit,
+            wing_speed: (p.wing_lift > 0.5).then(|| {
+                oscillation::weight_bearing_wing_speed(
+                    s.body.mass,
+                    s.body.wing_area,
+                    oscillation::mean_lift_coefficient(),
+                )
+            }),
             stiffness: p.pressure_stiffness as f32,
             mass: s.body.mass,
             wing_area: s.body.wing_area,
@@ -369,7 +378,7 @@ impl Model for BeeModel {
         let f_o = oscillation::accel(
             wing_pitch,
             out.roll_deg,
-            air.length(),
+            self.wing_speed.unwrap_or_else(|| air.length()),
             self.mass,
             self.wing_area,
             self.mean_cl,
