@@ -37,23 +37,33 @@ pub struct Command {
     pub aim: Vec3,
 }
 
-/// The stroke-plane command of a bee pointing along `forward` (horizontal unit vector),
-/// flying at `vel`, with cruising speed `cruise`, m/s, steered by `want` (the acceleration
-/// of Eq. 1's noise, pull and repulsion, m/s²) against its mean thrust `thrust` (m/s²);
-/// `near` in [0, 1] is how close it is to a nest or flower (1 at its surface), `pull` the
-/// target's pull, and `gain` the `manoeuvre` parameter (0: the paper's forward thrust).
-pub fn command(
-    forward: Vec3,
-    vel: Vec3,
-    cruise: f32,
-    want: Vec3,
-    thrust: f32,
-    near: f32,
-    pull: Vec3,
-    gain: f32,
-) -> Command {
+/// Where a bee is and what the forces ask of it. Vectors in the world frame (Y up); only
+/// their horizontal parts count.
+#[derive(Clone, Copy, Debug)]
+pub struct Situation {
+    /// The body's horizontal axis (unit vector).
+    pub forward: Vec3,
+    /// Velocity, m/s.
+    pub vel: Vec3,
+    /// Cruising (preferred) speed, m/s.
+    pub cruise: f32,
+    /// The acceleration Eq. 1's noise, pull and repulsion (and the way out of a nearby
+    /// surface) ask for, m/s².
+    pub want: Vec3,
+    /// The mean thrust of Eq. 2, m/s².
+    pub thrust: f32,
+    /// How close it is to a nest or flower, in [0, 1] (1 at its surface).
+    pub near: f32,
+    /// The targets' pull, m/s².
+    pub pull: Vec3,
+}
+
+/// The stroke-plane command for situation `s`; `gain` is the `manoeuvre` parameter (0:
+/// the paper's forward thrust).
+pub fn command(s: &Situation, gain: f32) -> Command {
+    let (forward, cruise, thrust, near) = (s.forward, s.cruise, s.thrust, s.near);
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-    let (want, vel, pull) = (flat(want), flat(vel), flat(pull));
+    let (want, vel, pull) = (flat(s.want), flat(s.vel), flat(s.pull));
     let slow = (1.0 - vel.length() / (SLOW_FRACTION * cruise).max(1e-6)).clamp(0.0, 1.0);
     let weight = gain * slow.max(near);
     // The share of full thrust along the body that the wanted acceleration asks for: the
@@ -101,13 +111,27 @@ mod tests {
 
     const F: Vec3 = Vec3::X;
 
+    /// `command` for a bee along +X with cruising speed 1 m/s and mean thrust 2.8 m/s².
+    fn cmd(vel: Vec3, want: Vec3, near: f32, pull: Vec3, gain: f32) -> Command {
+        let s = Situation {
+            forward: F,
+            vel,
+            cruise: 1.0,
+            want,
+            thrust: 2.8,
+            near,
+            pull,
+        };
+        command(&s, gain)
+    }
+
     #[test]
     fn cruising_bees_keep_the_paper_s_forward_thrust() {
         // At cruising speed, far from targets, whatever the forces want.
-        let c = command(F, F, 1.0, -3.0 * F, 2.8, 0.0, Vec3::ZERO, 1.0);
+        let c = cmd(F, -3.0 * F, 0.0, Vec3::ZERO, 1.0);
         assert_eq!((c.thrust, c.weight), (1.0, 0.0));
         // With the rule off, even a stopped bee at a nest.
-        let c = command(F, Vec3::ZERO, 1.0, -3.0 * F, 2.8, 1.0, -F, 0.0);
+        let c = cmd(Vec3::ZERO, -3.0 * F, 1.0, -F, 0.0);
         assert_eq!(c.thrust, 1.0);
     }
 
@@ -115,56 +139,30 @@ mod tests {
     fn a_stopped_bee_hovers_reverses_or_goes_as_the_forces_ask() {
         let stop = Vec3::ZERO;
         // Sent straight back, harder than its thrust: full reverse.
-        assert_eq!(
-            command(F, stop, 1.0, -5.0 * F, 2.8, 0.0, stop, 1.0).thrust,
-            -1.0
-        );
+        assert_eq!(cmd(stop, -5.0 * F, 0.0, stop, 1.0).thrust, -1.0);
         // Sent sideways: a hover; sent nowhere, at a nest: a hover; in the open: on.
-        assert!(
-            command(F, stop, 1.0, 3.0 * Vec3::Z, 2.8, 0.0, stop, 1.0)
-                .thrust
-                .abs()
-                < 1e-6
-        );
-        assert!(command(F, stop, 1.0, 0.1 * F, 2.8, 1.0, -F, 1.0).thrust < 0.05);
-        assert_eq!(
-            command(F, stop, 1.0, Vec3::ZERO, 2.8, 0.0, stop, 1.0).thrust,
-            1.0
-        );
+        assert!(cmd(stop, 3.0 * Vec3::Z, 0.0, stop, 1.0).thrust.abs() < 1e-6);
+        assert!(cmd(stop, 0.1 * F, 1.0, -F, 1.0).thrust < 0.05);
+        assert_eq!(cmd(stop, Vec3::ZERO, 0.0, stop, 1.0).thrust, 1.0);
         // Sent ahead: full thrust.
-        assert_eq!(
-            command(F, stop, 1.0, 5.0 * F, 2.8, 0.0, stop, 1.0).thrust,
-            1.0
-        );
+        assert_eq!(cmd(stop, 5.0 * F, 0.0, stop, 1.0).thrust, 1.0);
         // Half the cruising speed or more: cruising.
-        assert_eq!(
-            command(F, 0.5 * F, 1.0, -5.0 * F, 2.8, 0.0, stop, 1.0).thrust,
-            1.0
-        );
+        assert_eq!(cmd(0.5 * F, -5.0 * F, 0.0, stop, 1.0).thrust, 1.0);
     }
 
     #[test]
     fn a_manoeuvring_bee_turns_on_the_spot_and_a_backing_one_does_not_yaw_round() {
         let dt = 0.01;
-        // Stopped, sent to its left (+Y turn, towards −Z): turns at π rad/s.
-        let c = command(
-            F,
-            Vec3::ZERO,
-            1.0,
-            -3.0 * Vec3::Z,
-            2.8,
-            0.0,
-            Vec3::ZERO,
-            1.0,
-        );
+        // Stopped, sent to its left (+Y turn, towards −Z): turns at the full rate.
+        let c = cmd(Vec3::ZERO, -3.0 * Vec3::Z, 0.0, Vec3::ZERO, 1.0);
         let yaw = heading(&c, 0.0, Vec3::ZERO, dt).unwrap();
         assert!((yaw - TURN_RATE * dt).abs() < 1e-5, "{yaw}");
         // At a nest it faces the nest, whatever pushes it.
-        let c = command(F, Vec3::ZERO, 1.0, -3.0 * F, 2.8, 1.0, Vec3::Z, 1.0);
+        let c = cmd(Vec3::ZERO, -3.0 * F, 1.0, Vec3::Z, 1.0);
         assert_eq!(c.aim, Vec3::Z);
         // Moving backwards at a third of its cruise, the forces ahead: it holds its heading.
         let back = -0.35 * F;
-        let c = command(F, back, 1.0, 3.0 * F, 2.8, 0.0, Vec3::ZERO, 1.0);
+        let c = cmd(back, 3.0 * F, 0.0, Vec3::ZERO, 1.0);
         assert!(c.weight > 0.0 && c.weight <= MANOEUVRING);
         assert_eq!(heading(&c, 0.0, back, dt), Some(0.0));
     }

@@ -426,16 +426,16 @@ impl Model for BeeModel {
         // Within d0 of a surface, seen or not, it also wants out, away from it (out of a
         // corner along its diagonal, even facing straight into it, where both walls lie
         // outside the ±45° view).
-        let cmd = manoeuvre::command(
-            heading * Vec3::X,
-            c.vel,
-            c.speed,
-            want + steer.away * thrust,
+        let situation = manoeuvre::Situation {
+            forward: heading * Vec3::X,
+            vel: c.vel,
+            cruise: c.speed,
+            want: want + steer.away * thrust,
             thrust,
             near,
-            a_attr,
-            self.manoeuvre,
-        );
+            pull: a_attr,
+        };
+        let cmd = manoeuvre::command(&situation, self.manoeuvre);
         f_o.x *= cmd.thrust;
         // Eq. 1, plus the terms the paper leaves implicit (docs/model.md).
         let a = self.k1 * (heading * f_o) + steer_noise_pull + self.k3 * a_rep - air * drag;
