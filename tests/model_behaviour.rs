@@ -529,9 +529,16 @@ fn a_bee_stopped_in_a_corner_turns_and_flies_out() {
     let frames = run_with(sim, |_| {});
     let end = frames.last().unwrap()[0];
     let clearance = end.x.min(end.z);
-    println!("after 5 s the bee is at {end}, {clearance:.3} m from the nearer wall");
+    let from_corner = (end.x * end.x + end.z * end.z).sqrt();
+    println!(
+        "after 5 s the bee is at {end}, {from_corner:.3} m from the corner, {clearance:.3} m \
+         from the nearer wall"
+    );
+    // Out of the corner and off both walls (it may then fly on along one of them: since
+    // issue 17 a slowed bee backs out of the corner while it turns, and without noise
+    // nothing turns it further once it is clear of d0).
     assert!(
-        clearance > 0.3,
+        from_corner > 0.3 && clearance > 0.05,
         "the bee should have turned and left the corner: {end}"
     );
 }

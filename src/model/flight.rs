@@ -12,7 +12,7 @@ use glam::Vec3;
 
 /// Largest yaw rate, rad/s, of an agent that has (nearly) stopped in front of an obstacle
 /// it sees and turns on the spot to face away from it.
-const HOVER_TURN_RATE: f32 = std::f32::consts::PI;
+pub const HOVER_TURN_RATE: f32 = std::f32::consts::PI;
 /// Horizontal speed, m/s, below which an agent avoiding an obstacle turns on the spot: the
 /// roll of Eq. 6 steers only a moving bee, and a bee whose thrust points into a corner stops.
 const HOVER_TURN_SPEED: f32 = 0.05;
@@ -226,15 +226,21 @@ pub fn follow_heading(yaw: f32, vel: Vec3, steer: Avoidance, blend: f32, dt: f32
     let horizontal = Vec3::new(vel.x, 0.0, vel.z);
     let stopped = steer.avoiding && horizontal.length() < HOVER_TURN_SPEED;
     if stopped && steer.away.length_squared() > 1e-8 {
-        let dy = wrap_angle(math::yaw_of(steer.away) - yaw);
-        let turn = dy.clamp(-HOVER_TURN_RATE * dt, HOVER_TURN_RATE * dt);
-        math::wrap_tau(yaw + turn)
+        turn_towards(yaw, steer.away, HOVER_TURN_RATE, dt)
     } else if horizontal.length() > 0.02 {
         let dy = wrap_angle(math::yaw_of(horizontal) - yaw);
         math::wrap_tau(yaw + dy * blend)
     } else {
         yaw
     }
+}
+
+/// The heading (radians about +Y) turned towards the horizontal direction `dir` by at most
+/// `rate` rad/s over `dt`: a turn on the spot.
+#[inline]
+pub fn turn_towards(yaw: f32, dir: Vec3, rate: f32, dt: f32) -> f32 {
+    let dy = wrap_angle(math::yaw_of(dir) - yaw);
+    math::wrap_tau(yaw + dy.clamp(-rate * dt, rate * dt))
 }
 
 /// The pull of targets `targets` (scaled by `attraction`) on an agent at `pos`, plus the

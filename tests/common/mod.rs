@@ -186,3 +186,25 @@ pub fn shafts_src() -> String {
     }
     src
 }
+
+/// A lone bee's departures from its path, sampled at `fps` (positions per frame, after the
+/// first two seconds): the vertical (bob) and lateral (sway) offsets from the path averaged
+/// over one second around each frame, per frame, in metres.
+pub fn bob_and_sway_series(p: &[Vec3], fps: f64) -> (Vec<f64>, Vec<f64>) {
+    let w = (fps / 2.0).round() as usize;
+    let (mut bob, mut sway) = (Vec::new(), Vec::new());
+    for i in (2.0 * fps).round() as usize..p.len() - w {
+        let mean = p[i - w..=i + w].iter().copied().sum::<Vec3>() / (2 * w + 1) as f32;
+        let dir = (p[i + w] - p[i - w]).normalize_or_zero();
+        let d = p[i] - mean;
+        let side = dir.cross(Vec3::Y).normalize_or_zero();
+        bob.push(d.y as f64);
+        sway.push(d.dot(side) as f64);
+    }
+    (bob, sway)
+}
+
+/// Root mean square of a series.
+pub fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}

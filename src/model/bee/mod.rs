@@ -8,6 +8,7 @@
 
 pub mod hive;
 pub mod kernels;
+pub mod manoeuvre;
 pub mod oscillation;
 pub mod params;
 pub mod repulsion;
@@ -130,6 +131,10 @@ pub struct BeeModel {
     surface_speed_distance: f32,
     arrival_speed: f32,
     time_unit: f64,
+    /// Speed of Eq. 2's lift when it is the weight-bearing wing speed; None: the air speed.
+    wing_speed: Option<f32>,
+    /// Weight of the stroke-plane manoeuvres (`manoeuvre`, src/model/bee/manoeuvre.rs).
+    manoeuvre: f32,
     stiffness: f32,
     mass: f32,
     wing_area: f32,
@@ -176,6 +181,14 @@ impl Model for BeeModel {
             surface_speed_distance: p.surface_speed_distance as f32,
             arrival_speed: p.arrival_speed as f32,
             time_unit: p.oscillation_time_unit,
+            manoeuvre: p.manoeuvre as f32,
+            wing_speed: (p.wing_lift > 0.5).then(|| {
+                oscillation::weight_bearing_wing_speed(
+                    s.body.mass,
+                    s.body.wing_area,
+                    oscillation::mean_lift_coefficient(),
+                )
+            }),
             stiffness: p.pressure_stiffness as f32,
             mass: s.body.mass,
             wing_area: s.body.wing_area,
@@ -385,15 +398,14 @@ impl Model for BeeModel {
         };
         out.drawn_roll_deg = b.drawn_roll_deg + (drawn_target - b.drawn_roll_deg) * self.roll_blend;
         out.roll_deg = b.roll_deg + (roll_target - b.roll_deg) * self.roll_blend;
-        let f_o = oscillation::accel(
+        let mut f_o = oscillation::accel(
             wing_pitch,
             out.roll_deg,
-            air.length(),
+            self.wing_speed.unwrap_or_else(|| air.length()),
             self.mass,
             self.wing_area,
             self.mean_cl,
         );
-        let a_o = heading * f_o;
         // Linear drag sized so that mean thrust balances at the preferred speed, which
         // slows near surfaces (optic flow) and wanders slowly (log-normal, mean preserved)
         // when speed_wander > 0.
@@ -406,14 +418,14 @@ impl Model for BeeModel {
         // Arriving at a nest or flower the bee slows to a hover (docs/model.md), so that it
         // does not overshoot and orbit it: the approach and retreat are then the push of
         // the target's particles against the pull (Sec. V-B).
-        if self.arrival_speed < 1.0 {
-            let mut nearest_target = f32::INFINITY;
-            for &ti in &self.flight.targets {
-                let t = &cx.targets[ti];
-                if t.kind.has_body() {
-                    nearest_target = nearest_target.min(c.pos.distance(t.center) - t.radius);
-                }
+        let mut nearest_target = f32::INFINITY;
+        for &ti in &self.flight.targets {
+            let t = &cx.targets[ti];
+            if t.kind.has_body() {
+                nearest_target = nearest_target.min(c.pos.distance(t.center) - t.radius);
             }
+        }
+        if self.arrival_speed < 1.0 {
             pref *= vision::surface_speed_factor(nearest_target, self.arrival_speed, self.h);
         }
         if self.wander_sigma > 0.0 {
@@ -422,17 +434,41 @@ impl Model for BeeModel {
             let sg = self.wander_sigma;
             pref *= (sg * out.wander - 0.5 * sg * sg).exp();
         }
-        let drag = self.k1 * oscillation::mean_thrust_accel() / pref.max(1e-3);
-        // Eq. 1, plus the terms the paper leaves implicit (docs/model.md). While avoiding,
-        // the other rules are faded out by the ramp γ.
-        let a =
-            self.k1 * a_o + gamma * (self.k2 * self.curl.force(c.pos) + a_attr) + self.k3 * a_rep
-                - air * drag;
+        let thrust = self.k1 * oscillation::mean_thrust_accel();
+        let drag = thrust / pref.max(1e-3);
+        // Where Eq. 1's other forces send the bee. While avoiding, noise and pull are faded
+        // out by the ramp γ.
+        let steer_noise_pull = gamma * (self.k2 * self.curl.force(c.pos) + a_attr);
+        let want = steer_noise_pull + self.k3 * a_rep;
+        // Hovering, sharp turns, backward flight: the stroke plane tilts the thrust (issue 17).
+        let near = (1.0 - nearest_target / self.h).clamp(0.0, 1.0);
+        // Within d0 of a surface, seen or not, it also wants out, away from it (out of a
+        // corner along its diagonal, even facing straight into it, where both walls lie
+        // outside the ±45° view).
+        let situation = manoeuvre::Situation {
+            forward: heading * Vec3::X,
+            vel: c.vel,
+            cruise: c.speed,
+            want: want + steer.away * thrust,
+            thrust,
+            near,
+            pull: a_attr,
+        };
+        let cmd = manoeuvre::command(&situation, self.manoeuvre);
+        f_o.x *= cmd.thrust;
+        // Eq. 1, plus the terms the paper leaves implicit (docs/model.md).
+        let a = self.k1 * (heading * f_o) + steer_noise_pull + self.k3 * a_rep - air * drag;
 
         out.c = self.flight.advance(cx, c, a, a_col, steer);
+        if let Some(yaw) = manoeuvre::heading(&cmd, c.yaw, out.c.vel, cx.dt) {
+            out.c.yaw = yaw;
+        }
         if out.c.vel.length() > 0.02 {
-            out.climb_deg =
-                b.climb_deg + (elevation_deg(out.c.vel) - b.climb_deg) * self.flight.yaw_blend;
+            // A hovering bee stays level rather than nodding with the bob of Eq. 2: the
+            // pitch follows the climb fully from half the cruising speed.
+            let level = (out.c.vel.length() / (0.5 * c.speed)).min(1.0);
+            out.climb_deg = b.climb_deg
+                + (level * elevation_deg(out.c.vel) - b.climb_deg) * self.flight.yaw_blend;
         }
         out.pitch_deg = out.climb_deg + wing_pitch - oscillation::MEAN_PITCH_DEG;
         self.touch_down(cx, i, &mut out, ri);

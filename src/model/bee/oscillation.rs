@@ -55,14 +55,23 @@ pub fn mean_thrust_accel() -> f32 {
     GRAVITY * 16.429f32.to_radians()
 }
 
-/// F_o / m in the heading frame (m/s²). `air_speed` is |u| relative to the air. The lift
-/// is taken relative to its cycle mean: the mean wing lift carries the bee's weight, which
-/// the paper does not model, so only the oscillating part moves the body (docs/model.md).
+/// The wing speed U, m/s, at which Eq. 2's mean lift ½ ρ A U² l̄ carries the weight m g:
+/// 6.7 m/s for the default honeybee, close to the mean speed of its flapping wing
+/// (docs/model.md). With it the oscillating lift is g (l(θ) − l̄) / l̄, whatever the body.
+pub fn weight_bearing_wing_speed(mass: f32, wing_area: f32, mean_cl: f32) -> f32 {
+    (2.0 * mass * GRAVITY / (AIR_DENSITY * wing_area * mean_cl)).sqrt()
+}
+
+/// F_o / m in the heading frame (m/s²). `lift_speed` is the speed u of Eq. 2's lift: the
+/// body's air speed as the paper writes it, or the weight-bearing wing speed
+/// ([`weight_bearing_wing_speed`]). The lift is taken relative to its cycle mean: the mean
+/// wing lift carries the bee's weight, which the paper does not model, so only the
+/// oscillating part moves the body (docs/model.md).
 #[inline]
 pub fn accel(
     pitch_deg: f32,
     roll_deg: f32,
-    air_speed: f32,
+    lift_speed: f32,
     mass: f32,
     wing_area: f32,
     mean_cl: f32,
@@ -71,8 +80,8 @@ pub fn accel(
     let lift = 0.5
         * AIR_DENSITY
         * wing_area
-        * air_speed
-        * air_speed
+        * lift_speed
+        * lift_speed
         * (lift_coefficient(pitch_deg) - mean_cl)
         / mass;
     let sway = GRAVITY * roll_deg.to_radians();
@@ -107,6 +116,21 @@ mod tests {
             assert!((pitch_deg(t) as f64 - p).abs() < 1e-3, "t={t}");
             assert!((roll_deg(t) as f64 - r).abs() < 5e-3, "t={t}");
         }
+    }
+
+    #[test]
+    fn at_the_weight_bearing_wing_speed_the_lift_swings_by_a_quarter_of_g() {
+        // The default honeybee: 100 mg, 40 mm² of wing.
+        let cl = mean_lift_coefficient();
+        let u = weight_bearing_wing_speed(1e-4, 40e-6, cl);
+        assert!((u - 6.7).abs() < 0.05, "{u}");
+        let lift = |p: f32| accel(p, 0.0, u, 1e-4, 40e-6, cl).y;
+        // l(θ) at the ends of Eq. 3's swing against its mean, times g.
+        let (lo, hi) = (lift(12.929), lift(19.929));
+        assert!(
+            (lo + 2.37).abs() < 0.02 && (hi - 2.23).abs() < 0.02,
+            "{lo} {hi}"
+        );
     }
 
     #[test]

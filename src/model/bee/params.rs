@@ -41,8 +41,12 @@ crate::declare_params! {
         fov_deg: "deg", 45.0, [1.0, 180.0], "a half-angle from 1 to 180 degrees";
         /// Largest roll-to-avoid angle (Eq. 6: 45°).
         roll_max_deg: "deg", 45.0, [0.0, 90.0], "an angle from 0 to 90 degrees";
-        /// Seconds per unit of t in the maneuvering functions Eq. 3–4.
-        oscillation_time_unit: "s", 0.005, [1e-4, 10.0], "seconds per unit of t, from 0.0001 to 10";
+        /// Seconds per unit of t in the maneuvering functions Eq. 3–4 (2.5 ms: pitch at 5.6 Hz, roll at 2.2 Hz; docs/model.md).
+        oscillation_time_unit: "s", 0.0025, [1e-4, 10.0], "seconds per unit of t, from 0.0001 to 10";
+        /// 1: Eq. 2's lift at the wing speed whose mean lift carries the weight, so the body bobs visibly; 0: at the body's air speed, as the paper writes it.
+        wing_lift: "1", 1.0, [0.0, 1.0], "0 (off) or 1 (on)";
+        /// Weight of the stroke-plane manoeuvres of a bee that is slow or at a nest or flower: it hovers, turns on the spot and flies backwards as the other forces ask (0: Eq. 2's thrust always forward).
+        manoeuvre: "1", 1.0, [0.0, 1.0], "a weight from 0 to 1";
         /// Pressure stiffness k in p = k (ρ − ρ0) (Eq. 11), m²/s² per unit density ratio.
         pressure_stiffness: "m²/s²", 1.0, [0.0, 1e6], "a stiffness from 0 to 1e6";
         /// Spring stiffness of agent–agent contact (Sec. VII).
