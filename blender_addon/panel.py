@@ -127,6 +127,8 @@ def _draw_swarm(context, box, sw, path):
     col.prop(sw, "bee_length")
     col.prop(sw, "size_variation")
     col.prop(sw, "speed_variation")
+    if (sw.model or "bee") == "bee":
+        col.prop(sw, "start_inside")
     box.prop(sw, "spawn_object")
     if sw.spawn_object is None:
         col = box.column(align=True)

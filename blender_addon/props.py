@@ -168,6 +168,11 @@ class BeeswarmSwarm(bpy.types.PropertyGroup):
     speed_variation: FloatProperty(name="Speed Variation", default=0.15, min=0.0, max=0.9,
                                    description="Each bee's speed factor is drawn from "
                                                "[1 − v, 1 + v]")
+    start_inside: FloatProperty(name="Start Inside", default=0.0, min=0.0, max=1.0,
+                                subtype="FACTOR",
+                                description="Share of the bees inside the hive at the first "
+                                            "frame (bee model; needs a nest empty with "
+                                            "beeswarm_land and beeswarm_inside)")
     overrides: CollectionProperty(type=BeeswarmOverride)
     override_index: IntProperty(default=0)
 

@@ -338,12 +338,37 @@ def _is_animated(obj):
     return False
 
 
+def _seconds_range(obj, key):
+    """A custom property `beeswarm_<key>` holding [min, max] seconds, or None if unset."""
+    val = obj.get("beeswarm_" + key)
+    if val is None:
+        return None
+    try:
+        pair = [float(x) for x in val]
+    except (TypeError, ValueError):
+        pair = []
+    if len(pair) != 2:
+        raise ShotBuildError(f"{obj.name}: the custom property beeswarm_{key} must be two "
+                             f"numbers, [min, max] seconds (found {val!r})")
+    return pair
+
+
 def target_entry(obj, kind, scene, frames, depsgraph_frame):
     entry = {"type": kind, "name": obj.name}
     for key in ("radius", "strength", "reach"):
         val = obj.get("beeswarm_" + key)
         if isinstance(val, (int, float)):
             entry[key] = float(val)
+    # Landing and hive traffic (docs/shot-format.md): bees land on it, stay, and at a
+    # nest with `inside` go in and come out. The binary checks the values and says which
+    # key is wrong; the shot names the target after this object.
+    land = obj.get("beeswarm_land")
+    if land is not None:
+        entry["land"] = bool(land)
+    for key in ("stay", "inside"):
+        pair = _seconds_range(obj, key)
+        if pair is not None:
+            entry[key] = pair
     if _is_animated(obj) and depsgraph_frame is not None:
         keys = []
         for f in range(frames[0], frames[1] + 1):
@@ -429,6 +454,8 @@ def swarm_entry(sw):
             raise ShotBuildError(f"{label}: the bounds object '{sw.bounds_object.name}' is flat")
         entry["bounds"] = {"center": to_shot(centre), "size": _box_size_to_shot(size)}
     entry["variation"] = {"size": float(sw.size_variation), "speed": float(sw.speed_variation)}
+    if sw.start_inside > 0:
+        entry["start_inside"] = float(sw.start_inside)
     entry["bee"] = {"length": float(sw.bee_length), "radius": float(sw.bee_length) / 6.0}
     params = {}
     for o in sw.overrides:

@@ -248,6 +248,28 @@ def test_built_shot_passes_beeswarm_check(scene, beeswarm_bin, tmp_path):
     assert "3 obstacle(s)" in r.stdout and "1 target(s)" in r.stdout
 
 
+def test_hive_traffic_from_custom_properties(scene, beeswarm_bin, tmp_path):
+    """A nest empty's beeswarm_land / _stay / _inside and a swarm's Start Inside become the
+    shot's hive traffic, which the binary accepts; a malformed range names the object."""
+    hive = add_empty("Hive", (0.0, 0.3, 1.0), beeswarm_type="nest", beeswarm_land=True,
+                     beeswarm_stay=[0.3, 1.0], beeswarm_inside=[4.0, 12.0])
+    scene.beeswarm.swarms[0].start_inside = 0.25
+    bpy.context.view_layer.update()
+    shot, _ = shot_builder.build_shot(scene, scene.beeswarm)
+    doc = tomllib.loads(shot_builder.shot_toml(shot))
+    t = doc["target"][0]
+    assert t["land"] is True
+    assert t["stay"] == pytest.approx([0.3, 1.0]) and t["inside"] == pytest.approx([4.0, 12.0])
+    assert doc["swarm"][0]["start_inside"] == pytest.approx(0.25)
+    path = tmp_path / "hive.shot.toml"
+    path.write_text(shot_builder.shot_toml(shot, "test"))
+    r = subprocess.run([beeswarm_bin, "check", str(path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    hive["beeswarm_inside"] = [4.0]
+    with pytest.raises(shot_builder.ShotBuildError, match="Hive: the custom property beeswarm_inside"):
+        shot_builder.build_shot(scene, scene.beeswarm)
+
+
 def test_toml_writer_escapes_and_round_trips():
     from blender_addon import toml_writer
     doc = {"scene": {"name": 'a "quoted"\\name', "fps": 23.976, "frames": [1, 2]},
