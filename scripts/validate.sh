@@ -18,8 +18,6 @@
 # docs/validation_table.md, docs/validation_noise_table.md and out/validation/*.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROOT=$PWD
-REAL=${REAL:-$ROOT/../shared/data/mosquito_flights.csv}
 GENERATIONS=${GENERATIONS:-200}
 BASELINE_GENERATIONS=${BASELINE_GENERATIONS:-30}
 GA_SEED=${GA_SEED:-1}
@@ -34,17 +32,8 @@ else
     TABLES=out/validation; FIGURE=out/validation/mosquito_validation.png
 fi
 SEEDS=${SEEDS:-4}              # simulation runs pooled per individual (seeds 11, 12, ...)
-# Held-out runs pooled per model: one 60 s run of four insects is too small a sample (the
-# speed ΔE of one preset varies from 0.11 to 0.46 between seeds, docs/validation.md).
-EVAL_SEEDS=${EVAL_SEEDS:-2026 2027 2028 2029 2030 2031 2032 2033}
 OUT=out/validation
-
-if [ ! -f "$REAL" ]; then
-    echo "validate.sh: the mosquito recording is not at $REAL (set REAL=...)" >&2
-    exit 2
-fi
-cargo build --release --quiet
-BIN=$ROOT/target/release/beeswarm
+source scripts/validation_common.sh
 mkdir -p "$OUT" docs/img
 
 # The example shot with another model and preset; paths made absolute so the copy works

@@ -13,17 +13,8 @@
 # Writes out/validation_fastswarm/* and docs/validation_fastswarm_table.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROOT=$PWD
-REAL=${REAL:-$ROOT/../shared/data/mosquito_flights.csv}
-EVAL_SEEDS=${EVAL_SEEDS:-2026 2027 2028 2029 2030 2031 2032 2033}
 OUT=out/validation_fastswarm
-
-if [ ! -f "$REAL" ]; then
-    echo "validate_fastswarm.sh: the mosquito recording is not at $REAL (set REAL=...)" >&2
-    exit 2
-fi
-cargo build --release --quiet
-BIN=$ROOT/target/release/beeswarm
+source scripts/validation_common.sh
 mkdir -p "$OUT"
 
 # 1. The database from the even-numbered recorded segments only.

@@ -6,16 +6,8 @@
 # recording). Writes out/validation_substeps/table.md (quoted in docs/validation.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROOT=$PWD
-REAL=${REAL:-$ROOT/../shared/data/mosquito_flights.csv}
-EVAL_SEEDS=${EVAL_SEEDS:-2026 2027 2028 2029 2030 2031 2032 2033}
 OUT=out/validation_substeps
-if [ ! -f "$REAL" ]; then
-    echo "validate_substeps.sh: the mosquito recording is not at $REAL (set REAL=...)" >&2
-    exit 2
-fi
-cargo build --release --quiet
-BIN=$ROOT/target/release/beeswarm
+source scripts/validation_common.sh
 rm -rf "$OUT"
 mkdir -p "$OUT"
 first=""
