@@ -1415,22 +1415,19 @@ fn weld(
     seam: &[bool],
     indices: &mut [i32],
 ) -> (Vec<Vec3>, Vec<Vec3>) {
-    let key = |i: usize| {
-        let (p, n) = (points[i], normals[i]);
-        // +0.0 and -0.0 are one position; bits make the key exact and hashable. A vertex
-        // off the seams keys on its index (NaN bits never come from a finite mesh).
-        if seam[i] {
-            [p.x, p.y, p.z, n.x, n.y, n.z].map(|v| (v + 0.0).to_bits())
-        } else {
-            [u32::MAX, i as u32, 0, 0, 0, 0]
-        }
-    };
-    let mut first = std::collections::HashMap::with_capacity(points.len());
+    let mut first = std::collections::HashMap::new();
     let mut remap = Vec::with_capacity(points.len());
     let (mut out_p, mut out_n) = (Vec::new(), Vec::new());
     for i in 0..points.len() {
         let next = out_p.len() as i32;
-        let j = *first.entry(key(i)).or_insert(next);
+        let j = if seam[i] {
+            // +0.0 and -0.0 are one position; bits make the key exact and hashable.
+            let (p, n) = (points[i], normals[i]);
+            let key = [p.x, p.y, p.z, n.x, n.y, n.z].map(|v| (v + 0.0).to_bits());
+            *first.entry(key).or_insert(next)
+        } else {
+            next
+        };
         if j == next {
             out_p.push(points[i]);
             out_n.push(normals[i]);
@@ -1445,15 +1442,12 @@ fn weld(
 
 /// Which of a triangle list's `n` vertices lie on an edge of only one triangle.
 fn open_edge_vertices(indices: &[u16], n: usize) -> Vec<bool> {
-    let mut uses = std::collections::HashMap::new();
-    for t in indices.chunks_exact(3) {
-        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-            *uses.entry((a.min(b), a.max(b))).or_insert(0u32) += 1;
-        }
-    }
+    let tris = indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]].map(u32::from));
     let mut open = vec![false; n];
-    for (&(a, b), &k) in &uses {
-        if k == 1 {
+    for (&(a, b), &(uses, _)) in &crate::geometry::mesh::edge_uses(tris) {
+        if uses == 1 {
             open[a as usize] = true;
             open[b as usize] = true;
         }

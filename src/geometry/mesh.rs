@@ -711,13 +711,10 @@ fn part(verts: &[Vec3], tris: &[[u32; 3]], flags: TriMeshFlags) -> Option<Part> 
 
 /// Splits a solid mesh into its connected pieces, checks each is closed and consistently
 /// wound, turns inside-out pieces outward, and builds their query structures.
-fn solid_parts(
-    verts: &[Vec3],
-    tris: &[[u32; 3]],
-    has_area: impl Fn(&[u32; 3]) -> bool,
-) -> Result<Vec<Part>, MeshError> {
-    // Edge use: how many triangles, and the sum of their directions (+1 a→b, −1 b→a,
-    // with a < b): a closed, consistent edge is used twice, once each way.
+/// Each edge (a, b), a < b, of a triangle list: how many triangles use it, and the sum of
+/// their directions (+1 a→b, −1 b→a). A closed, consistently wound surface uses every edge
+/// twice, once each way; an edge used once is open.
+pub fn edge_uses(tris: impl IntoIterator<Item = [u32; 3]>) -> HashMap<(u32, u32), (u32, i32)> {
     let mut edges: HashMap<(u32, u32), (u32, i32)> = HashMap::new();
     for t in tris {
         for k in 0..3 {
@@ -727,6 +724,15 @@ fn solid_parts(
             e.1 += if a < b { 1 } else { -1 };
         }
     }
+    edges
+}
+
+fn solid_parts(
+    verts: &[Vec3],
+    tris: &[[u32; 3]],
+    has_area: impl Fn(&[u32; 3]) -> bool,
+) -> Result<Vec<Part>, MeshError> {
+    let edges = edge_uses(tris.iter().copied());
     let mid = |(a, b): (u32, u32)| 0.5 * (verts[a as usize] + verts[b as usize]);
     let mut sorted: Vec<_> = edges.iter().collect();
     sorted.sort_unstable_by_key(|(k, _)| **k);
