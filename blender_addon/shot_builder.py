@@ -236,6 +236,21 @@ def mesh_obstacle(obj, depsgraph, file_name, node, scene=None, frames=None):
     return entry, (node, shot, tri)
 
 
+def _sample_frames(scene, frames, sample):
+    """[(frame, sample())] for every frame of `frames`, the scene evaluated at each once
+    (keyframes, drivers, constraints and parents all count); the scene's frame and subframe
+    are restored afterwards, whatever happens."""
+    current, sub = scene.frame_current, scene.frame_subframe
+    out = []
+    try:
+        for f in range(frames[0], frames[1] + 1):
+            scene.frame_set(f)
+            out.append((f, sample()))
+    finally:
+        scene.frame_set(current, subframe=sub)
+    return out
+
+
 def motion_keys(obj, scene, frames):
     """(keys, scale) of an animated object: one shot key {frame, position, rotation} per
     frame of `frames` (sampled from the evaluated scene, so keyframes, drivers, constraints
@@ -243,25 +258,21 @@ def motion_keys(obj, scene, frames):
     obstacle is rigid: UnsupportedShape otherwise). Euler angles are kept continuous from
     frame to frame (a turn past 180° goes on to 190°, not back to −170°), so the shot's
     linear interpolation between keys turns the way Blender did."""
-    current, sub = scene.frame_current, scene.frame_subframe
+    poses = _sample_frames(scene, frames,
+                           lambda: (*_decompose(obj), obj.matrix_world.translation.copy()))
     keys, scale, prev = [], None, None
-    try:
-        for f in range(frames[0], frames[1] + 1):
-            scene.frame_set(f)
-            rot, s = _decompose(obj)
-            if scale is None:
-                scale = s.copy()
-            elif max(abs(a - b) for a, b in zip(s, scale)) > 1e-5 * max(max(scale), 1e-12):
-                raise UnsupportedShape(
-                    f"'{obj.name}' changes scale at frame {f}; a moving mesh obstacle keeps "
-                    f"one scale: animate its location and rotation only")
-            r = C @ rot @ C_INV
-            e = r.to_euler("XYZ") if prev is None else r.to_euler("XYZ", prev)
-            prev = e
-            keys.append({"frame": f, "position": to_shot(obj.matrix_world.translation),
-                         "rotation": [_clean(math.degrees(a), 1e-6) for a in e]})
-    finally:
-        scene.frame_set(current, subframe=sub)
+    for f, (rot, s, position) in poses:
+        if scale is None:
+            scale = s.copy()
+        elif max(abs(a - b) for a, b in zip(s, scale)) > 1e-5 * max(max(scale), 1e-12):
+            raise UnsupportedShape(
+                f"'{obj.name}' changes scale at frame {f}; a moving mesh obstacle keeps "
+                f"one scale: animate its location and rotation only")
+        r = C @ rot @ C_INV
+        e = r.to_euler("XYZ") if prev is None else r.to_euler("XYZ", prev)
+        prev = e
+        keys.append({"frame": f, "position": to_shot(position),
+                     "rotation": [_clean(math.degrees(a), 1e-6) for a in e]})
     return keys, scale
 
 
@@ -353,7 +364,7 @@ def _seconds_range(obj, key):
     return pair
 
 
-def target_entry(obj, kind, scene, frames, depsgraph_frame):
+def target_entry(obj, kind, scene, frames):
     entry = {"type": kind, "name": obj.name}
     for key in ("radius", "strength", "reach"):
         val = obj.get("beeswarm_" + key)
@@ -369,11 +380,9 @@ def target_entry(obj, kind, scene, frames, depsgraph_frame):
         pair = _seconds_range(obj, key)
         if pair is not None:
             entry[key] = pair
-    if _is_animated(obj) and depsgraph_frame is not None:
-        keys = []
-        for f in range(frames[0], frames[1] + 1):
-            keys.append({"frame": f, "position": to_shot(depsgraph_frame(obj, f))})
-        entry["keys"] = keys
+    if _is_animated(obj):
+        positions = _sample_frames(scene, frames, lambda: obj.matrix_world.translation.copy())
+        entry["keys"] = [{"frame": f, "position": to_shot(p)} for f, p in positions]
     else:
         entry["position"] = to_shot(obj.matrix_world.translation)
     return entry
@@ -519,13 +528,6 @@ def build_shot(scene, settings, name=None):
         obstacles.append({"type": "plane", "name": "ground", "point": [0.0, 0.0, 0.0],
                           "normal": [0.0, 1.0, 0.0]})
 
-    def position_at(obj, frame):
-        current = scene.frame_current
-        scene.frame_set(frame)
-        p = obj.matrix_world.translation.copy()
-        scene.frame_set(current)
-        return p
-
     targets = []
     for obj in _objects(settings.targets):
         if obj.type != "EMPTY" and not _custom_type(obj, TARGET_TYPES):
@@ -534,7 +536,7 @@ def build_shot(scene, settings, name=None):
         if kind is None:
             warnings.append(f"{obj.name}: not a nest, flower or attractor; treated as an attractor")
             kind = "attractor"
-        targets.append(target_entry(obj, kind, scene, frames, position_at))
+        targets.append(target_entry(obj, kind, scene, frames))
 
     fps = float(scene_fps(scene))
     shot = {
