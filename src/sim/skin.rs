@@ -1,0 +1,304 @@
+//! Neighbour candidates reused over substeps (Verlet lists with a skin).
+//!
+//! An agent's neighbour list is the (at most) `k = MAX_NEIGHBOURS` agents nearest it
+//! strictly within its radius R, ties broken by index, kept in increasing index order
+//! (docs/model.md, "Bounded neighbours"). Agents move a few millimetres per substep and R
+//! is 0.15–0.3 m, so the grid query that finds them (most of the gather pass) mostly finds
+//! the same agents again. At a rebuild each agent keeps, besides its list, every agent
+//! within
+//!
+//! ```text
+//! L = min(R, d_k + σ) + σ        (d_k: its k-th nearest distance then, R if fewer than k)
+//! ```
+//!
+//! and until the next rebuild picks its list from those candidates alone, at their current
+//! positions. **Why that is exact**: while every agent has moved at most σ/2 since the
+//! rebuild, the distance between any two has changed by at most σ (triangle inequality,
+//! σ/2 for each end). Now, (i) its k old nearest are still within d_k + σ, so if it had k
+//! the k nearest now lie within d_k + σ; (ii) every agent within R now lies within R.
+//! Both say the new list lies within min(R, d_k + σ) now, hence within L at the rebuild:
+//! among the candidates. The world checks the largest displacement since the rebuild
+//! every substep (a maximum over agents: the same whatever the thread count) and rebuilds
+//! (grid and lists) as soon as twice it exceeds σ; also at the first substep of every
+//! frame (so a run resumed from a checkpoint, taken between frames, steps exactly as one
+//! that was not), when an agent is placed or restored, and when an agent went into or came
+//! out of its hive (`Agent::hidden`: the grid leaves hidden agents out). Floating-point
+//! rounding of the distances (a few units in the last place) is covered by a relative
+//! slack of 1e-5 on L.
+//!
+//! A list picked from candidates is the list the grid would find (ties aside: the grid
+//! breaks an exact tie at the k-th distance by its walk order, this by index), in the same
+//! index order, so every sum over neighbours is the same bit for bit whether the list was
+//! found afresh or reused (`reused_lists_step_exactly_as_fresh_ones`).
+//!
+//! An agent with more than [`MAX_CANDIDATES`] within L (a crowd: at 100,000 per m³ d_k is
+//! 34 mm and a skin of a few centimetres holds hundreds) keeps none and is queried afresh
+//! every substep, on a grid then rebuilt every substep.
+
+use crate::geometry::Grid;
+use crate::model::context::{MAX_NEIGHBOURS, NeighbourList};
+use glam::Vec3;
+
+/// The most candidates an agent keeps. At the default spawn density (500 per m³, about 7
+/// within a bee's radius) a bee keeps about 15–20.
+pub const MAX_CANDIDATES: usize = 48;
+
+/// A rebuild's first search (everything within R + σ) gives up past this many: the size
+/// of the scratch buffer [`build`] takes.
+pub const SCRATCH: usize = 128;
+
+/// Relative slack on L for floating-point rounding.
+const SLACK: f32 = 1e-5;
+
+/// The candidates' radius L for an agent of radius `radius` whose k-th nearest lies at
+/// `kth` (`radius` if it has fewer than k), with skin `sigma`.
+#[inline]
+pub fn limit(radius: f32, kth: f32, sigma: f32) -> f32 {
+    (radius.min(kth + sigma) + sigma) * (1.0 + SLACK)
+}
+
+/// Sorting key of a candidate: squared distance, then index (non-negative floats order
+/// as their bits do).
+#[inline(always)]
+fn key(j: u32, d2: f32) -> u64 {
+    ((d2.to_bits() as u64) << 32) | j as u64
+}
+
+/// Lists into `list`, in increasing index order, the (at most) `MAX_NEIGHBOURS` of the
+/// candidates `found()` yields (indices with squared distances, each index once, in any
+/// order) nearest strictly within `radius`, ties broken by index; returns the k-th
+/// nearest distance (`radius` if fewer than k were within it). `found` is called twice
+/// when more than k are within the radius.
+#[inline(always)]
+fn pick<I: Iterator<Item = (u32, f32)>>(
+    found: impl Fn() -> I,
+    radius: f32,
+    list: &mut NeighbourList,
+) -> f32 {
+    let r2 = radius * radius;
+    let mut m = 0;
+    let mut far = 0.0f32;
+    list.clear();
+    for (j, d2) in found() {
+        if d2 < r2 {
+            if m < MAX_NEIGHBOURS {
+                list.push(j);
+            }
+            m += 1;
+            far = far.max(d2);
+        }
+    }
+    let kth = if m < MAX_NEIGHBOURS {
+        radius
+    } else if m == MAX_NEIGHBOURS {
+        far.sqrt()
+    } else {
+        // More than k within the radius (a denser spot): the k smallest keys.
+        let mut keys = [0u64; SCRATCH];
+        let mut n = 0;
+        for (j, d2) in found() {
+            if d2 < r2 && n < SCRATCH {
+                keys[n] = key(j, d2);
+                n += 1;
+            }
+        }
+        let keys = &mut keys[..n];
+        let kth = if n - MAX_NEIGHBOURS <= 8 {
+            // A few too many (the usual case between rebuilds): drop the farthest.
+            let mut n = n;
+            while n > MAX_NEIGHBOURS {
+                let (far, _) = keys[..n]
+                    .iter()
+                    .enumerate()
+                    .fold((0, 0), |m, (t, &k)| if k > m.1 { (t, k) } else { m });
+                keys.swap(far, n - 1);
+                n -= 1;
+            }
+            keys[..MAX_NEIGHBOURS].iter().copied().fold(0, u64::max)
+        } else {
+            *keys.select_nth_unstable(MAX_NEIGHBOURS - 1).1
+        };
+        list.clear();
+        for &k in &keys[..MAX_NEIGHBOURS] {
+            list.push(k as u32);
+        }
+        f32::from_bits((kth >> 32) as u32).sqrt()
+    };
+    list.sort();
+    kth
+}
+
+/// A substep after a rebuild: `list` from agent candidates `cands` at their current
+/// `positions`, for an agent at `p` of radius `radius`.
+#[inline]
+pub fn reselect(cands: &[u32], positions: &[Vec3], p: Vec3, radius: f32, list: &mut NeighbourList) {
+    // The grid's arithmetic: (q - p)², summed x, y, z (negation is exact).
+    let found = || {
+        cands
+            .iter()
+            .map(|&j| (j, p.distance_squared(positions[j as usize])))
+    };
+    pick(found, radius, list);
+}
+
+/// A rebuild (the grid built over `positions`): lists agent `me`'s neighbours (at `p`,
+/// radius `radius`) into `list` and appends its candidates for skin `sigma` to `out`;
+/// false if it has more than [`MAX_CANDIDATES`] (nothing appended: it is queried afresh).
+/// `scratch` holds [`SCRATCH`] entries (its contents are not read).
+#[allow(clippy::too_many_arguments)]
+pub fn build(
+    grid: &Grid,
+    positions: &[Vec3],
+    p: Vec3,
+    me: usize,
+    radius: f32,
+    sigma: f32,
+    list: &mut NeighbourList,
+    out: &mut Vec<u32>,
+    scratch: &mut [(u32, f32)],
+) -> bool {
+    // Where the grid's cells are as large as R (a sparse cloud), one search out to R + σ
+    // gives the list and the candidates; in a crowd that sphere holds thousands, so the
+    // list comes from the grid's own k-nearest walk and the candidates, if few enough are
+    // expected, from a second search out to L.
+    if grid.cell() >= radius
+        && let Some(n) = grid.within(p, radius + sigma, me, scratch)
+    {
+        let found = &scratch[..n];
+        let kth = pick(|| found.iter().copied(), radius, list);
+        let l = limit(radius, kth, sigma);
+        let l2 = l * l;
+        let before = out.len();
+        out.extend(found.iter().filter(|f| f.1 < l2).map(|f| f.0));
+        if out.len() - before <= MAX_CANDIDATES {
+            return true;
+        }
+        out.truncate(before);
+        return false;
+    }
+    list.fill(grid, p, radius, me);
+    list.sort();
+    let n = list.indices().len();
+    let kth = if n == MAX_NEIGHBOURS {
+        list.indices()
+            .iter()
+            .map(|&j| p.distance_squared(positions[j as usize]))
+            .fold(0.0f32, f32::max)
+            .sqrt()
+    } else {
+        radius
+    };
+    let l = limit(radius, kth, sigma);
+    // Expected within L at a uniform density like that within kth.
+    if n as f32 * (l / kth).powi(3) > 1.5 * MAX_CANDIDATES as f32 {
+        return false;
+    }
+    match grid.within(p, l, me, &mut scratch[..MAX_CANDIDATES]) {
+        Some(n) => {
+            out.extend(scratch[..n].iter().map(|f| f.0));
+            true
+        }
+        None => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rng;
+
+    fn cloud(rng: &mut Rng, n: usize, half: f32) -> Vec<Vec3> {
+        (0..n)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-half, half),
+                    rng.range(-half, half),
+                    rng.range(-half, half),
+                )
+            })
+            .collect()
+    }
+
+    /// The set of agent `i`'s neighbours the grid finds afresh.
+    fn fresh(pts: &[Vec3], i: usize, radius: f32) -> (Vec<u32>, bool) {
+        let mut g = Grid::default();
+        g.build(pts, radius);
+        let mut list = NeighbourList::default();
+        list.fill(&g, pts[i], radius, i);
+        list.sort();
+        // A tie at the k-th distance: either choice is right.
+        let r2 = radius * radius;
+        let mut d: Vec<f32> = (0..pts.len())
+            .filter(|&j| j != i)
+            .map(|j| pts[i].distance_squared(pts[j]))
+            .filter(|&d2| d2 < r2)
+            .collect();
+        d.sort_by(f32::total_cmp);
+        let tie = d.len() > MAX_NEIGHBOURS && d[MAX_NEIGHBOURS - 1] == d[MAX_NEIGHBOURS];
+        (list.indices().to_vec(), tie)
+    }
+
+    #[test]
+    fn lists_picked_from_candidates_equal_fresh_ones_while_agents_stay_within_the_skin() {
+        // A sparse cloud (fewer than k within R), a denser one (k within R) and a crowd
+        // (most agents keep no candidates); every agent moves randomly, in total at most
+        // σ/2 from where the candidates were kept.
+        let mut rng = Rng::new(7, 1, 2);
+        for (n, half, radius, sigma) in [
+            (1500, 1.0, 0.2, 0.04),
+            (1500, 0.4, 0.2, 0.03),
+            (3000, 0.1, 0.15, 0.01),
+        ] {
+            let mut pts = cloud(&mut rng, n, half);
+            let mut g = Grid::default();
+            g.build(&pts, radius);
+            let mut out = Vec::new();
+            let mut ranges = Vec::new();
+            let mut scratch = vec![(0u32, 0.0f32); SCRATCH];
+            let mut kept = 0;
+            for i in 0..n {
+                let mut list = NeighbourList::default();
+                let before = out.len();
+                let ok = build(
+                    &g,
+                    &pts,
+                    pts[i],
+                    i,
+                    radius,
+                    sigma,
+                    &mut list,
+                    &mut out,
+                    &mut scratch,
+                );
+                ranges.push(ok.then_some(before..out.len()));
+                kept += ok as usize;
+                let (want, tie) = fresh(&pts, i, radius);
+                if !tie {
+                    assert_eq!(list.indices(), &want[..], "rebuild, agent {i}");
+                }
+            }
+            assert!(kept > 0, "some agents keep candidates ({n} in {half} m)");
+            let start = pts.clone();
+            for step in 0..4 {
+                for (p, s) in pts.iter_mut().zip(&start) {
+                    // A random walk, clamped to σ/2 from the start.
+                    let d = *p + cloud(&mut rng, 1, sigma * 0.3)[0] - *s;
+                    *p = *s + d.clamp_length_max(sigma * 0.5 * 0.999);
+                }
+                for i in 0..n {
+                    let Some(r) = ranges[i].clone() else { continue };
+                    let mut list = NeighbourList::default();
+                    reselect(&out[r], &pts, pts[i], radius, &mut list);
+                    let (want, tie) = fresh(&pts, i, radius);
+                    if !tie {
+                        assert_eq!(
+                            list.indices(),
+                            &want[..],
+                            "step {step}, agent {i} ({n} in {half} m)"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
