@@ -1179,6 +1179,37 @@ mod tests {
     }
 
     #[test]
+    fn reused_lists_resume_from_a_checkpoint_and_ignore_the_thread_count() {
+        // Zonal reuses its lists over each frame; a run restored between frames (a
+        // checkpoint) and runs on 1 and 3 threads step bit for bit alike.
+        let run = |threads: usize, resume: bool| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut s = sim("zonal", 2000);
+                for _ in 0..2 {
+                    s.advance();
+                }
+                if resume {
+                    let state = s.state_bytes();
+                    s = sim("zonal", 2000);
+                    s.restore_state(&state).unwrap();
+                }
+                for _ in 0..2 {
+                    s.advance();
+                }
+                assert!(s.rebuilds < 4 * 4, "lists were reused");
+                positions(&s)
+            })
+        };
+        let one = run(1, false);
+        assert_eq!(one, run(3, false), "1 and 3 threads");
+        assert_eq!(one, run(1, true), "resumed after frame 2");
+    }
+
+    #[test]
     fn an_agent_past_half_the_skin_forces_a_rebuild() {
         let mut s = sim("zonal", 300);
         substep(&mut s, 0);
