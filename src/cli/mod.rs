@@ -3,7 +3,7 @@
 //! [`main`]. Exit codes: 0 success, 1 a failure while working, 2 bad input.
 
 mod bake;
-pub(crate) mod bench;
+mod bench;
 mod check;
 mod fastswarm_db;
 pub mod models;

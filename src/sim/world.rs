@@ -1116,19 +1116,19 @@ fn split<'a, T>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cli::bench::{BenchShot, bench_shot};
 
+    /// `beeswarm bench`'s scene: `bees` agents of `model` at 500 per m³ in soft bounds.
     fn sim(model: &str, bees: usize) -> Simulation {
-        let shot = bench_shot(&BenchShot {
-            bees,
-            frames: 4,
-            substeps: 4,
-            model,
-            preset: None,
-            density: 500.0,
-            nest: false,
-        })
-        .expect("bench shot");
+        let side = (bees as f64 / 500.0).cbrt();
+        let c = side / 2.0 + 0.5;
+        let src = format!(
+            "[scene]\nname = \"skin\"\nfps = 24\nframes = [1, 5]\nsubsteps = 4\nseed = 1\n\
+             [[swarm]]\ncount = {bees}\nmodel = \"{model}\"\n\
+             spawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n\
+             bounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n"
+        );
+        let here = std::path::Path::new(".");
+        let shot = crate::shot::parse(&src, std::path::Path::new("<test>"), here).expect("shot");
         Simulation::new(&shot)
     }
 
