@@ -64,33 +64,34 @@ fn key(j: u32, d2: f32) -> u64 {
     ((d2.to_bits() as u64) << 32) | j as u64
 }
 
-/// The k-th smallest squared distance, by key, of `found`'s `m` entries strictly within
-/// `r2` (`m` > k; any order): drops the farthest while only a few too many, else a
-/// selection.
-fn kth_key<const N: usize>(found: &[(u32, f32)], r2: f32) -> u64 {
-    let mut keys = [0u64; N];
-    let mut n = 0;
+/// The k-th smallest key of `found`'s entries strictly within `r2` (more than k of
+/// them; any order): the k smallest so far, and the largest of those, replaced while a
+/// nearer one comes (a selection over all of them cost zonal's rebuilds more).
+fn kth_key(found: &[(u32, f32)], r2: f32) -> u64 {
+    let mut best = [u64::MAX; MAX_NEIGHBOURS];
+    let (mut n, mut worst, mut at) = (0, u64::MAX, 0);
     for &(j, d2) in found {
-        if d2 < r2 && n < N {
-            keys[n] = key(j, d2);
+        if d2 >= r2 {
+            continue;
+        }
+        let k = key(j, d2);
+        if n < MAX_NEIGHBOURS {
+            best[n] = k;
             n += 1;
+            if n < MAX_NEIGHBOURS {
+                continue;
+            }
+        } else if k < worst {
+            best[at] = k;
+        } else {
+            continue;
         }
+        (at, worst) = best
+            .iter()
+            .enumerate()
+            .fold((0, 0), |m, (t, &b)| if b > m.1 { (t, b) } else { m });
     }
-    let keys = &mut keys[..n];
-    if n - MAX_NEIGHBOURS <= 8 {
-        let mut n = n;
-        while n > MAX_NEIGHBOURS {
-            let (far, _) = keys[..n]
-                .iter()
-                .enumerate()
-                .fold((0, 0), |m, (t, &k)| if k > m.1 { (t, k) } else { m });
-            keys.swap(far, n - 1);
-            n -= 1;
-        }
-        keys[..MAX_NEIGHBOURS].iter().copied().fold(0, u64::max)
-    } else {
-        *keys.select_nth_unstable(MAX_NEIGHBOURS - 1).1
-    }
+    worst
 }
 
 /// Lists into `list` the (at most) `MAX_NEIGHBOURS` of `found` (indices with squared
@@ -98,7 +99,7 @@ fn kth_key<const N: usize>(found: &[(u32, f32)], r2: f32) -> u64 {
 /// index, in `found`'s order; returns the k-th nearest distance (`radius` if fewer than k
 /// were within it).
 #[inline(always)]
-fn pick<const N: usize>(found: &[(u32, f32)], radius: f32, list: &mut NeighbourList) -> f32 {
+fn pick(found: &[(u32, f32)], radius: f32, list: &mut NeighbourList) -> f32 {
     let r2 = radius * radius;
     let mut m = 0;
     let mut far = 0.0f32;
@@ -118,7 +119,7 @@ fn pick<const N: usize>(found: &[(u32, f32)], radius: f32, list: &mut NeighbourL
         far.sqrt()
     } else {
         // More than k within the radius (a denser spot): those up to the k-th key.
-        let kth = kth_key::<N>(found, r2);
+        let kth = kth_key(found, r2);
         list.clear();
         for &(j, d2) in found {
             if d2 < r2 && key(j, d2) <= kth {
@@ -138,7 +139,7 @@ pub fn reselect(cands: &[u32], positions: &[Vec3], p: Vec3, radius: f32, list: &
         // The grid's arithmetic: (q - p)², summed x, y, z (negation is exact).
         *f = (j, p.distance_squared(positions[j as usize]));
     }
-    pick::<MAX_CANDIDATES>(&found[..cands.len()], radius, list);
+    pick(&found[..cands.len()], radius, list);
 }
 
 /// A rebuild (the grid built over `positions`): lists agent `me`'s neighbours (at `p`,
@@ -177,7 +178,7 @@ pub fn build(
                 .filter(|f| f.1 < r2)
                 .fold(0.0f32, |a, f| a.max(f.1))
                 .sqrt(),
-            _ => f32::from_bits((kth_key::<SCRATCH>(found, r2) >> 32) as u32).sqrt(),
+            _ => f32::from_bits((kth_key(found, r2) >> 32) as u32).sqrt(),
         };
         let l = limit(radius, kth, sigma);
         let l2 = l * l;
@@ -192,7 +193,7 @@ pub fn build(
         if kept > MAX_CANDIDATES {
             // Too many to keep: the list alone, from everything found.
             found.sort_unstable_by_key(|f| f.0);
-            pick::<SCRATCH>(found, radius, list);
+            pick(found, radius, list);
             return false;
         }
         &mut found[..kept]
@@ -229,7 +230,7 @@ pub fn build(
         }
         found[j] = v;
     }
-    pick::<MAX_CANDIDATES>(found, radius, list);
+    pick(found, radius, list);
     out.extend(found.iter().map(|f| f.0));
     true
 }
