@@ -43,13 +43,15 @@ const GRADS_BY_HASH: [[f32; 3]; 256] = {
     t
 };
 
+/// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ and its derivative, lane by lane (the three
+/// axes side by side: each lane is the scalar polynomial's arithmetic, in its order).
 #[inline]
-fn fade(t: f32) -> f32 {
+fn fade(t: Vec4) -> Vec4 {
     t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
 }
 
 #[inline]
-fn dfade(t: f32) -> f32 {
+fn dfade(t: Vec4) -> Vec4 {
     30.0 * t * t * (t * (t - 2.0) + 1.0)
 }
 
@@ -260,13 +262,15 @@ impl LatticePoint {
         let (ix, fx) = split(x.x);
         let (iy, fy) = split(x.y);
         let (iz, fz) = split(x.z);
+        let f = Vec4::new(fx, fy, fz, 0.0);
+        let (w, dw) = (fade(f), dfade(f));
         LatticePoint {
             ix,
             iy,
             iz,
             f: [fx, fy, fz],
-            w: [fade(fx), fade(fy), fade(fz)],
-            dw: [dfade(fx), dfade(fy), dfade(fz)],
+            w: [w.x, w.y, w.z],
+            dw: [dw.x, dw.y, dw.z],
         }
     }
 }
@@ -323,6 +327,26 @@ mod tests {
                     one.to_array().map(f32::to_bits),
                     "at {x}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn lattice_weights_are_the_fade_polynomials_bit_for_bit() {
+        let mut rng = crate::math::Rng::new(7, 8, 9);
+        for _ in 0..20_000 {
+            let x = Vec3::new(
+                rng.range(-300.0, 300.0),
+                rng.range(-3.0, 3.0),
+                rng.range(-0.01, 0.01),
+            );
+            let lp = LatticePoint::new(x);
+            for a in 0..3 {
+                let t = lp.f[a];
+                let fade = t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+                let dfade = 30.0 * t * t * (t * (t - 2.0) + 1.0);
+                assert_eq!(lp.w[a].to_bits(), fade.to_bits(), "at {x}");
+                assert_eq!(lp.dw[a].to_bits(), dfade.to_bits(), "at {x}");
             }
         }
     }
