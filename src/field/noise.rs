@@ -32,13 +32,26 @@ const GRADS: [[f32; 3]; 16] = [
     [0.0, -1.0, -1.0],
 ];
 
+/// `GRADS[h & 15]` for every byte h, so that a corner hash indexes it directly.
+const GRADS_BY_HASH: [[f32; 3]; 256] = {
+    let mut t = [[0.0f32; 3]; 256];
+    let mut h = 0;
+    while h < 256 {
+        t[h] = GRADS[h & 15];
+        h += 1;
+    }
+    t
+};
+
+/// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ and its derivative, lane by lane (the three
+/// axes side by side: each lane is the scalar polynomial's arithmetic, in its order).
 #[inline]
-fn fade(t: f32) -> f32 {
+fn fade(t: Vec4) -> Vec4 {
     t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
 }
 
 #[inline]
-fn dfade(t: f32) -> f32 {
+fn dfade(t: Vec4) -> Vec4 {
     30.0 * t * t * (t * (t - 2.0) + 1.0)
 }
 
@@ -59,23 +72,25 @@ impl Perlin {
 
     /// Corner hashes p[p[p[x] + y] + z] of the lattice cell at (ix, iy, iz), sharing the
     /// inner lookups between corners (14 table reads instead of 24). Corner order: bit 0 =
-    /// x, bit 1 = y, bit 2 = z. `& 511` lets the compiler drop bounds checks.
+    /// x, bit 1 = y, bit 2 = z. Every index is a byte plus a byte plus at most 1, under
+    /// 512: the compiler sees that from the types and drops the bounds checks.
     #[inline]
-    fn corner_hashes(&self, ix: usize, iy: usize, iz: usize) -> [u8; 8] {
+    fn corner_hashes(&self, ix: u8, iy: u8, iz: u8) -> [u8; 8] {
         let p = &self.perm;
+        let (ix, iy, iz) = (ix as usize, iy as usize, iz as usize);
         let a = p[ix] as usize + iy;
-        let b = p[(ix + 1) & 511] as usize + iy;
-        let (aa, ab) = (p[a & 511] as usize + iz, p[(a + 1) & 511] as usize + iz);
-        let (ba, bb) = (p[b & 511] as usize + iz, p[(b + 1) & 511] as usize + iz);
+        let b = p[ix + 1] as usize + iy;
+        let (aa, ab) = (p[a] as usize + iz, p[a + 1] as usize + iz);
+        let (ba, bb) = (p[b] as usize + iz, p[b + 1] as usize + iz);
         [
-            p[aa & 511],
-            p[ba & 511],
-            p[ab & 511],
-            p[bb & 511],
-            p[(aa + 1) & 511],
-            p[(ba + 1) & 511],
-            p[(ab + 1) & 511],
-            p[(bb + 1) & 511],
+            p[aa],
+            p[ba],
+            p[ab],
+            p[bb],
+            p[aa + 1],
+            p[ba + 1],
+            p[ab + 1],
+            p[bb + 1],
         ]
     }
 
@@ -99,7 +114,7 @@ impl Perlin {
         let mut g = [[0.0f32; 3]; 8];
         let mut c = [0.0f32; 8];
         for (k, h) in hashes.into_iter().enumerate() {
-            g[k] = GRADS[(h & 15) as usize];
+            g[k] = GRADS_BY_HASH[h as usize];
             let d = [
                 fx - (k & 1) as f32,
                 fy - ((k >> 1) & 1) as f32,
@@ -143,14 +158,15 @@ impl Perlin {
 /// The gradients of three noise functions at one point (the curl's three potentials),
 /// side by side in the lanes of a 4-wide vector: each lane does exactly the arithmetic of
 /// [`Perlin::sample_at`], in the same order, so each gradient is bit-identical to that
-/// function's, at about half its cost.
+/// function's, at about half its cost. The cell's two faces (z = 0 and z = 1) are
+/// interpolated along x and y one after the other, so that fewer values are live at once.
 pub fn gradients3(noise: &[Perlin; 3], lp: &LatticePoint) -> [Vec3; 3] {
     let LatticePoint {
         ix,
         iy,
         iz,
-        f: [fx, fy, fz],
-        w: [u, v, w],
+        f,
+        w: [_, _, w],
         dw: [du, dv, dw],
     } = *lp;
     let hashes = [
@@ -158,44 +174,16 @@ pub fn gradients3(noise: &[Perlin; 3], lp: &LatticePoint) -> [Vec3; 3] {
         noise[1].corner_hashes(ix, iy, iz),
         noise[2].corner_hashes(ix, iy, iz),
     ];
-    // Per corner: the gradient's x, y, z components, one potential per lane.
-    let mut gx = [Vec4::ZERO; 8];
-    let mut gy = [Vec4::ZERO; 8];
-    let mut gz = [Vec4::ZERO; 8];
-    let mut c = [Vec4::ZERO; 8];
-    for k in 0..8 {
-        let g = |n: usize| GRADS[(hashes[n][k] & 15) as usize];
-        let (g0, g1, g2) = (g(0), g(1), g(2));
-        gx[k] = Vec4::new(g0[0], g1[0], g2[0], 0.0);
-        gy[k] = Vec4::new(g0[1], g1[1], g2[1], 0.0);
-        gz[k] = Vec4::new(g0[2], g1[2], g2[2], 0.0);
-        let d = [
-            fx - (k & 1) as f32,
-            fy - ((k >> 1) & 1) as f32,
-            fz - ((k >> 2) & 1) as f32,
-        ];
-        c[k] = gx[k] * d[0] + gy[k] * d[1] + gz[k] * d[2];
-    }
+    let lower = Face::new(&hashes, 0, f, lp);
+    let upper = Face::new(&hashes, 4, f, lp);
     let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
-    let x00 = lerp(c[0], c[1], u);
-    let x10 = lerp(c[2], c[3], u);
-    let x01 = lerp(c[4], c[5], u);
-    let x11 = lerp(c[6], c[7], u);
-    let y0 = lerp(x00, x10, v);
-    let y1 = lerp(x01, x11, v);
-    let dx = lerp(
-        lerp(c[1] - c[0], c[3] - c[2], v),
-        lerp(c[5] - c[4], c[7] - c[6], v),
-        w,
-    ) * du;
-    let dy = lerp(x10 - x00, x11 - x01, w) * dv;
-    let dz = (y1 - y0) * dw;
-    let blend = |g: &[Vec4; 8]| {
-        let g0 = lerp(lerp(g[0], g[1], u), lerp(g[2], g[3], u), v);
-        let g1 = lerp(lerp(g[4], g[5], u), lerp(g[6], g[7], u), v);
-        lerp(g0, g1, w)
-    };
-    let (bx, by, bz) = (blend(&gx) + dx, blend(&gy) + dy, blend(&gz) + dz);
+    // As `sample_at`: ∂N/∂x = du · (x-differences interpolated along y, then z), and so on.
+    let dx = lerp(lower.dx, upper.dx, w) * du;
+    let dy = lerp(lower.dy, upper.dy, w) * dv;
+    let dz = (upper.value - lower.value) * dw;
+    let bx = lerp(lower.gx, upper.gx, w) + dx;
+    let by = lerp(lower.gy, upper.gy, w) + dy;
+    let bz = lerp(lower.gz, upper.gz, w) + dz;
     [
         Vec3::new(bx.x, by.x, bz.x),
         Vec3::new(bx.y, by.y, bz.y),
@@ -203,12 +191,67 @@ pub fn gradients3(noise: &[Perlin; 3], lp: &LatticePoint) -> [Vec3; 3] {
     ]
 }
 
+/// One face of a lattice cell (its four corners at z = 0 or z = 1) interpolated along x
+/// and y for three noise functions at once (one per lane): what [`gradients3`] then
+/// interpolates along z.
+struct Face {
+    /// The noise value on the face (`y0` or `y1` of `sample_at`).
+    value: Vec4,
+    /// x-differences of the corner values, interpolated along y.
+    dx: Vec4,
+    /// y-difference of the x-interpolated values.
+    dy: Vec4,
+    /// The corner gradients interpolated along x and y, by component.
+    gx: Vec4,
+    gy: Vec4,
+    gz: Vec4,
+}
+
+impl Face {
+    /// Corners `first..first + 4` (0 or 4) of the cell whose corner hashes are `hashes`.
+    #[inline(always)]
+    fn new(hashes: &[[u8; 8]; 3], first: usize, f: [f32; 3], lp: &LatticePoint) -> Self {
+        let [fx, fy, fz] = f;
+        let [u, v, _] = lp.w;
+        let mut gx = [Vec4::ZERO; 4];
+        let mut gy = [Vec4::ZERO; 4];
+        let mut gz = [Vec4::ZERO; 4];
+        let mut c = [Vec4::ZERO; 4];
+        for j in 0..4 {
+            let k = first + j;
+            let g = |n: usize| GRADS_BY_HASH[hashes[n][k] as usize];
+            let (g0, g1, g2) = (g(0), g(1), g(2));
+            gx[j] = Vec4::new(g0[0], g1[0], g2[0], 0.0);
+            gy[j] = Vec4::new(g0[1], g1[1], g2[1], 0.0);
+            gz[j] = Vec4::new(g0[2], g1[2], g2[2], 0.0);
+            let d = [
+                fx - (k & 1) as f32,
+                fy - ((k >> 1) & 1) as f32,
+                fz - ((k >> 2) & 1) as f32,
+            ];
+            c[j] = gx[j] * d[0] + gy[j] * d[1] + gz[j] * d[2];
+        }
+        let lerp = |a: Vec4, b: Vec4, t: f32| a + (b - a) * t;
+        let x0 = lerp(c[0], c[1], u);
+        let x1 = lerp(c[2], c[3], u);
+        let blend = |g: &[Vec4; 4]| lerp(lerp(g[0], g[1], u), lerp(g[2], g[3], u), v);
+        Face {
+            value: lerp(x0, x1, v),
+            dx: lerp(c[1] - c[0], c[3] - c[2], v),
+            dy: x1 - x0,
+            gx: blend(&gx),
+            gy: blend(&gy),
+            gz: blend(&gz),
+        }
+    }
+}
+
 /// A point's lattice cell, fractional position, blend weights and their derivatives.
 #[derive(Clone, Copy, Debug)]
 pub struct LatticePoint {
-    ix: usize,
-    iy: usize,
-    iz: usize,
+    ix: u8,
+    iy: u8,
+    iz: u8,
     f: [f32; 3],
     w: [f32; 3],
     dw: [f32; 3],
@@ -219,13 +262,15 @@ impl LatticePoint {
         let (ix, fx) = split(x.x);
         let (iy, fy) = split(x.y);
         let (iz, fz) = split(x.z);
+        let f = Vec4::new(fx, fy, fz, 0.0);
+        let (w, dw) = (fade(f), dfade(f));
         LatticePoint {
             ix,
             iy,
             iz,
             f: [fx, fy, fz],
-            w: [fade(fx), fade(fy), fade(fz)],
-            dw: [dfade(fx), dfade(fy), dfade(fz)],
+            w: [w.x, w.y, w.z],
+            dw: [dw.x, dw.y, dw.z],
         }
     }
 }
@@ -233,10 +278,10 @@ impl LatticePoint {
 /// Lattice cell (wrapped to the table) and fraction of one coordinate. An inline floor:
 /// the portable `f32::floor` is a library call on baseline x86-64.
 #[inline]
-fn split(x: f32) -> (usize, f32) {
+fn split(x: f32) -> (u8, f32) {
     let t = x as i32;
     let i = if (t as f32) > x { t - 1 } else { t };
-    ((i & 255) as usize, x - i as f32)
+    (i as u8, x - i as f32)
 }
 
 #[cfg(test)]
@@ -282,6 +327,26 @@ mod tests {
                     one.to_array().map(f32::to_bits),
                     "at {x}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn lattice_weights_are_the_fade_polynomials_bit_for_bit() {
+        let mut rng = crate::math::Rng::new(7, 8, 9);
+        for _ in 0..20_000 {
+            let x = Vec3::new(
+                rng.range(-300.0, 300.0),
+                rng.range(-3.0, 3.0),
+                rng.range(-0.01, 0.01),
+            );
+            let lp = LatticePoint::new(x);
+            for a in 0..3 {
+                let t = lp.f[a];
+                let fade = t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+                let dfade = 30.0 * t * t * (t * (t - 2.0) + 1.0);
+                assert_eq!(lp.w[a].to_bits(), fade.to_bits(), "at {x}");
+                assert_eq!(lp.dw[a].to_bits(), dfade.to_bits(), "at {x}");
             }
         }
     }

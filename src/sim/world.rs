@@ -12,10 +12,10 @@ use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
 use crate::model::context::NeighbourList;
 use crate::model::{
-    Agent, Context, Model, Neighbour, Pose, Start, StartInside, SwarmSetup, TargetNow, with_model,
+    Agent, Context, Model, Neighbour, Start, StartInside, SwarmSetup, TargetNow, with_model,
 };
 use crate::shot::{Region, Shot};
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -30,8 +30,7 @@ struct Runner<M: Model> {
     next: Vec<M::Agent>,
     /// Global index of the first agent.
     start: usize,
-    /// Recording buffers, reused every frame: attitudes, and channel values agent by agent.
-    poses: Vec<Pose>,
+    /// Recording buffer, reused every frame: channel values agent by agent.
     values: Vec<f32>,
     /// Gather pass buffers, reused every substep: this swarm's agents in grid order, where
     /// each of them stands in it, and the lists and sums in that order.
@@ -369,40 +368,55 @@ where
         let n = self.agents.len();
         let channels = M::INFO.channels.len();
         let (m, agents) = (&self.model, &self.agents);
-        // Attitudes and channel values in parallel (quaternions and angular velocities
-        // are most of a frame's recording); the columns are then filled in order.
-        self.poses.clear();
-        self.poses
-            .par_extend(agents.par_iter().with_min_len(512).map(|a| m.pose(a, dt)));
-        self.values.clear();
-        self.values.resize(n * channels, 0.0);
-        if channels > 0 {
-            self.values
-                .par_chunks_mut(channels)
-                .zip(agents.par_iter().zip(self.poses.par_iter()))
-                .with_min_len(512)
-                .for_each(|(out, (a, pose))| m.record(a, pose, out));
-        }
-        f.ids.clear();
-        f.ids.extend((0..n as u64).map(|k| first_id + k));
-        f.position.clear();
-        f.position.extend(agents.iter().map(|a| a.position()));
-        f.velocity.clear();
-        f.velocity.extend(agents.iter().map(|a| a.velocity()));
-        f.orientation.clear();
-        f.orientation
-            .extend(self.poses.iter().map(|p| p.orientation));
-        f.heading.clear();
-        f.heading.extend(self.poses.iter().map(|p| p.heading));
-        f.angular_velocity_deg.clear();
-        f.angular_velocity_deg
-            .extend(self.poses.iter().map(|p| p.angular_velocity_deg));
-        f.scale.clear();
-        f.scale.extend(agents.iter().map(|a| a.size()));
+        // Every column is written in place, in parallel, each entry by its own agent: the
+        // same values on any thread count, and no serial copy after the poses. (The
+        // frame's buffers are reused, so after the first frame the resizes do nothing.)
+        f.ids.resize(n, 0);
+        f.position.resize(n, Vec3::ZERO);
+        f.velocity.resize(n, Vec3::ZERO);
+        f.orientation.resize(n, Quat::IDENTITY);
+        f.heading.resize(n, Quat::IDENTITY);
+        f.angular_velocity_deg.resize(n, Vec3::ZERO);
+        f.scale.resize(n, 0.0);
+        // Channel values agent by agent (a model writes its own as one row), turned into
+        // columns below. One row per agent even without channels, so that the rows zip
+        // with the agents.
+        let row = channels.max(1);
+        self.values.resize(n * row, 0.0);
+        f.ids
+            .par_iter_mut()
+            .zip(f.position.par_iter_mut())
+            .zip(f.velocity.par_iter_mut())
+            .zip(f.orientation.par_iter_mut())
+            .zip(f.heading.par_iter_mut())
+            .zip(f.angular_velocity_deg.par_iter_mut())
+            .zip(f.scale.par_iter_mut())
+            .zip(self.values.par_chunks_mut(row))
+            .zip(agents.par_iter())
+            .enumerate()
+            .with_min_len(512)
+            .for_each(
+                |(k, ((((((((id, pos), vel), ori), head), ang), scale), values), a))| {
+                    let pose = m.pose(a, dt);
+                    m.record(a, &pose, &mut values[..channels]);
+                    *id = first_id + k as u64;
+                    *pos = a.position();
+                    *vel = a.velocity();
+                    *ori = pose.orientation;
+                    *head = pose.heading;
+                    *ang = pose.angular_velocity_deg;
+                    *scale = a.size();
+                },
+            );
         f.channels.resize_with(channels, Vec::new);
+        let values = &self.values;
         for (c, column) in f.channels.iter_mut().enumerate() {
-            column.clear();
-            column.extend(self.values.iter().skip(c).step_by(channels));
+            column.resize(n, 0.0);
+            column
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(4096)
+                .for_each(|(k, v)| *v = values[k * row + c]);
         }
     }
 
@@ -628,7 +642,6 @@ impl Simulation {
                     next: Vec::with_capacity(agents.len()),
                     agents,
                     start: first,
-                    poses: Vec::new(),
                     values: Vec::new(),
                     order: Vec::new(),
                     rank: Vec::new(),

@@ -95,10 +95,12 @@ pub fn command(s: &Situation, gain: f32) -> Command {
 /// velocity as before), except that a bee drifting backwards keeps facing forward: it
 /// does not yaw round onto its velocity.
 pub fn heading(cmd: &Command, yaw: f32, vel: Vec3, dt: f32) -> Option<f32> {
-    let forward = Vec3::new(yaw.cos(), 0.0, -yaw.sin());
+    // The body axis only when it is asked for: a cruising bee (weight 0) skips the trig.
+    let backwards =
+        || Vec3::new(vel.x, 0.0, vel.z).dot(Vec3::new(yaw.cos(), 0.0, -yaw.sin())) < 0.0;
     if cmd.weight > MANOEUVRING && cmd.aim.length_squared() > 1e-8 {
         Some(flight::turn_towards(yaw, cmd.aim, TURN_RATE, dt))
-    } else if cmd.weight > HOLDING && Vec3::new(vel.x, 0.0, vel.z).dot(forward) < 0.0 {
+    } else if cmd.weight > HOLDING && backwards() {
         Some(yaw)
     } else {
         None

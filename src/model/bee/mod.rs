@@ -337,8 +337,11 @@ impl Model for BeeModel {
         let wing_pitch = oscillation::pitch_deg(tt + b.phase_pitch as f64);
         let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
         // The vision axis o is F_o's thrust axis (the heading pitched by Eq. 3), as the
-        // calibrated preset was fitted with, not the drawn body's (docs/model.md).
-        let forward = heading * (Quat::from_rotation_z(wing_pitch.to_radians()) * Vec3::X);
+        // calibrated preset was fitted with, not the drawn body's (docs/model.md). Only
+        // an obstacle needs it: worked out at the first one (a sine and cosine saved in
+        // open air).
+        let mut vision_axis = None::<Vec3>;
+        let thrust_axis = || heading * (Quat::from_rotation_z(wing_pitch.to_radians()) * Vec3::X);
         let d0 = self.flight.d0;
         let mut gamma = 1.0f32;
         let mut nearest = f32::INFINITY;
@@ -351,6 +354,7 @@ impl Model for BeeModel {
             let d = q.distance - ri;
             nearest_any = nearest_any.min(d);
             let r_e = q.point - c.pos;
+            let forward = *vision_axis.get_or_insert_with(thrust_axis);
             if d < d0 {
                 let n = normalize_or(Vec3::new(-r_e.x, 0.0, -r_e.z), Vec3::ZERO);
                 steer.away += n * (1.0 - d.max(0.0) / d0);

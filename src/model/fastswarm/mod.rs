@@ -86,6 +86,8 @@ pub struct FastswarmModel {
     yaw_blend: f32,
     /// Every agent by grid cell, for Eq. 6's attraction zone (rebuilt each step).
     cells: neighbours::CellIndex,
+    /// Every agent's position at the step (what `cells` is built from; kept to reuse).
+    positions: Vec<Vec3>,
 }
 
 impl FastswarmModel {
@@ -130,6 +132,7 @@ impl Model for FastswarmModel {
             radius: s.body.radius,
             yaw_blend: lag_blend(s.dt as f32, HEADING_LAG),
             cells: neighbours::CellIndex::default(),
+            positions: Vec::new(),
             p,
         }
     }
@@ -143,7 +146,9 @@ impl Model for FastswarmModel {
     /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them).
     fn prepare(&mut self, cx: &Context) {
         let cell = (self.p.d_att2 as f32).max(1e-4);
-        self.cells.build(cx.agents.iter().map(|a| a.pos), cell);
+        self.positions.clear();
+        self.positions.extend(cx.agents.iter().map(|a| a.pos));
+        self.cells.build(&self.positions, cell);
     }
 
     /// Starts with a database velocity (the paper: "a random velocity selected from the
@@ -215,11 +220,8 @@ impl Model for FastswarmModel {
         // more, the first MAX_ATTRACTION found (the sum is an average).
         let mut att = Attraction::new(self.rho, d_att1, pos);
         if w_oa > 0.0 {
-            self.cells.for_each_near(pos, |j| {
-                let q = cx.agents[j].pos;
-                let d2 = q.distance_squared(pos);
-                if j != i && d2 >= d_att1 * d_att1 && d2 < d_att2 * d_att2 && att.n < MAX_ATTRACTION
-                {
+            self.cells.for_each_in_shell(pos, d_att1, d_att2, |j, q| {
+                if j != i && att.n < MAX_ATTRACTION {
                     att.add(q);
                 }
             });

@@ -8,12 +8,52 @@
 
 use glam::Vec3;
 
-/// Agents sorted by grid cell, rebuilt once per step.
+/// Entries tested at once in a scan.
+const LANES: usize = 8;
+
+/// The most cells a dense table may hold per indexed agent (beyond a floor of
+/// [`MIN_TABLE`]); a swarm spread wider is searched by binary search in the sorted keys.
+const CELLS_PER_AGENT: usize = 8;
+const MIN_TABLE: usize = 4096;
+
+/// Agents sorted by grid cell, rebuilt once per step, with their positions stored in the
+/// same order (a struct of arrays) so that a scan reads contiguous memory.
+///
+/// The order is by cell — x, then y, then z cell coordinate — and by agent index within a
+/// cell. When the cells the agents occupy fit a box of at most [`CELLS_PER_AGENT`] per
+/// agent, they are placed by a counting sort into a dense table of where each cell's run
+/// starts (a row is then two reads); otherwise by sorting their packed cell keys (a row is
+/// then two binary searches). Both give the same order.
 #[derive(Clone, Debug, Default)]
 pub struct CellIndex {
     cell: f32,
-    /// (cell key, agent index), sorted: each cell's agents in index order.
-    sorted: Vec<(u64, u32)>,
+    /// Agent index of each entry.
+    index: Vec<u32>,
+    /// Position components of each entry, m, padded with [`LANES`] entries at +∞ so that
+    /// a batch may start anywhere.
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    /// Where each cell's run starts (dense), or every entry's packed key (sparse).
+    lookup: Lookup,
+    /// Scratch of `build`: each agent's cell and (sparse) the (key, index) pairs sorted.
+    cells: Vec<[i64; 3]>,
+    pairs: Vec<(u64, u32)>,
+}
+
+#[derive(Clone, Debug, Default)]
+enum Lookup {
+    #[default]
+    Empty,
+    /// The box of cells `origin .. origin + dims`; `starts[c]` is the first entry of cell
+    /// c = (x·dims_y + y)·dims_z + z (box coordinates), `starts[c + 1]` its end.
+    Dense {
+        origin: [i64; 3],
+        dims: [i64; 3],
+        starts: Vec<u32>,
+    },
+    /// Every entry's packed cell key ([`key`]), ascending.
+    Sparse(Vec<u64>),
 }
 
 /// A cell coordinate, clamped so that any finite position has a key.
@@ -28,38 +68,182 @@ fn key(c: [i64; 3]) -> u64 {
 
 impl CellIndex {
     /// Indexes `positions` in cells of edge `cell` (the search radius).
-    pub fn build(&mut self, positions: impl Iterator<Item = Vec3>, cell: f32) {
+    pub fn build(&mut self, positions: &[Vec3], cell: f32) {
         self.cell = cell;
-        self.sorted.clear();
-        self.sorted.extend(positions.enumerate().map(|(j, p)| {
-            (
-                key([coord(p.x, cell), coord(p.y, cell), coord(p.z, cell)]),
-                j as u32,
-            )
-        }));
-        self.sorted.sort_unstable();
+        self.cells.clear();
+        self.cells.extend(
+            positions
+                .iter()
+                .map(|p| [coord(p.x, cell), coord(p.y, cell), coord(p.z, cell)]),
+        );
+        self.index.clear();
+        self.lookup = Lookup::Empty;
+        if let Some((origin, dims)) = self.dense_box(positions.len()) {
+            let linear = |c: &[i64; 3]| {
+                (((c[0] - origin[0]) * dims[1] + (c[1] - origin[1])) * dims[2] + (c[2] - origin[2]))
+                    as usize
+            };
+            let mut starts = match std::mem::take(&mut self.lookup) {
+                Lookup::Dense { starts, .. } => starts,
+                _ => Vec::new(),
+            };
+            starts.clear();
+            starts.resize((dims[0] * dims[1] * dims[2]) as usize + 1, 0);
+            for c in &self.cells {
+                starts[linear(c) + 1] += 1;
+            }
+            for k in 1..starts.len() {
+                starts[k] += starts[k - 1];
+            }
+            // Agents in index order into their cells' runs: each run in index order.
+            let mut next = starts.clone();
+            self.index.resize(positions.len(), 0);
+            for (j, c) in self.cells.iter().enumerate() {
+                let slot = &mut next[linear(c)];
+                self.index[*slot as usize] = j as u32;
+                *slot += 1;
+            }
+            self.lookup = Lookup::Dense {
+                origin,
+                dims,
+                starts,
+            };
+        } else {
+            self.pairs.clear();
+            self.pairs.extend(
+                self.cells
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &c)| (key(c), j as u32)),
+            );
+            self.pairs.sort_unstable();
+            self.index.extend(self.pairs.iter().map(|e| e.1));
+            self.lookup = Lookup::Sparse(self.pairs.iter().map(|e| e.0).collect());
+        }
+        for (out, axis) in [(&mut self.x, 0), (&mut self.y, 1), (&mut self.z, 2)] {
+            out.clear();
+            out.extend(self.index.iter().map(|&j| positions[j as usize][axis]));
+            out.extend([f32::INFINITY; LANES]);
+        }
     }
 
-    /// Calls `f(j)` for every indexed agent in the 27 cells around `p` (all those within
-    /// one cell edge of it, and some farther), in a fixed order: cell by cell, each in
-    /// index order, so that sums over them do not depend on threads. The three cells of a
-    /// row along z have consecutive keys, so each row is one run of the sorted list.
-    #[inline]
-    pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(usize)) {
-        if self.sorted.is_empty() {
-            return;
+    /// The box of the occupied cells, (first cell, cells per axis), when a dense table of
+    /// it is small enough for `n` agents.
+    fn dense_box(&self, n: usize) -> Option<([i64; 3], [i64; 3])> {
+        let first = self.cells.first()?;
+        let (mut lo, mut hi) = (*first, *first);
+        for c in &self.cells {
+            for a in 0..3 {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
         }
+        let dims = [0, 1, 2].map(|a| hi[a] - lo[a] + 1);
+        let limit = (n * CELLS_PER_AGENT).max(MIN_TABLE) as i64;
+        // Each factor is at most 2²¹ (`coord`), so the products cannot overflow i64.
+        (dims[0] * dims[1] * dims[2] <= limit).then_some((lo, dims))
+    }
+
+    /// The entries of the cells (x, y, z_lo ..= z_hi): one run, as the cells of a row
+    /// along z are consecutive in the order.
+    #[inline]
+    fn row(&self, x: i64, y: i64, z_lo: i64, z_hi: i64) -> std::ops::Range<usize> {
+        match &self.lookup {
+            Lookup::Empty => 0..0,
+            Lookup::Dense {
+                origin,
+                dims,
+                starts,
+            } => {
+                let (x, y) = (x - origin[0], y - origin[1]);
+                let (z_lo, z_hi) = (
+                    (z_lo - origin[2]).max(0),
+                    (z_hi - origin[2]).min(dims[2] - 1),
+                );
+                if x < 0 || x >= dims[0] || y < 0 || y >= dims[1] || z_lo > z_hi {
+                    return 0..0;
+                }
+                let c = ((x * dims[1] + y) * dims[2]) as usize;
+                starts[c + z_lo as usize] as usize..starts[c + z_hi as usize + 1] as usize
+            }
+            Lookup::Sparse(keys) => {
+                // No cell lies beyond the clamp bounds (`coord`), so the row stops there.
+                let lo = key([x, y, z_lo.max(-(1 << 20))]);
+                let hi = key([x, y, z_hi.min((1 << 20) - 1)]);
+                let start = keys.partition_point(|&k| k < lo);
+                start..start + keys[start..].partition_point(|&k| k <= hi)
+            }
+        }
+    }
+
+    /// Calls `f(j, p_j)` for every indexed agent j with r1 ≤ ‖p_j − p‖ < r2 (compared
+    /// squared, as (p_j − p)·(p_j − p) ≥ r1² and < r2² in f32) among the 27 cells around
+    /// `p`, so every one within one cell edge of it when r2 is at most the edge; in a fixed
+    /// order: cell by cell, each in index order, so that sums over them do not depend on
+    /// threads. A row of three cells along z is one run, tested [`LANES`] at a time.
+    #[inline]
+    pub fn for_each_in_shell(&self, p: Vec3, r1: f32, r2: f32, mut f: impl FnMut(usize, Vec3)) {
+        let (near2, far2) = (r1 * r1, r2 * r2);
         let c = [p.x, p.y, p.z].map(|x| coord(x, self.cell));
         for dx in -1..=1 {
             for dy in -1..=1 {
-                // No cell lies beyond the clamp bounds (`coord`), so the row stops there.
-                let lo = key([c[0] + dx, c[1] + dy, (c[2] - 1).max(-(1 << 20))]);
-                let hi = key([c[0] + dx, c[1] + dy, (c[2] + 1).min((1 << 20) - 1)]);
-                let start = self.sorted.partition_point(|e| e.0 < lo);
-                for e in self.sorted[start..].iter().take_while(|e| e.0 <= hi) {
-                    f(e.1 as usize);
+                let run = self.row(c[0] + dx, c[1] + dy, c[2] - 1, c[2] + 1);
+                for b in run.clone().step_by(LANES) {
+                    let mut hits = self.shell_lanes(b, p, near2, far2);
+                    if run.end - b < LANES {
+                        hits &= (1 << (run.end - b)) - 1;
+                    }
+                    while hits != 0 {
+                        let l = hits.trailing_zeros() as usize;
+                        hits &= hits - 1;
+                        let q = Vec3::new(self.x[b + l], self.y[b + l], self.z[b + l]);
+                        f(self.index[b + l] as usize, q);
+                    }
                 }
             }
+        }
+    }
+
+    /// Bit l set where entry `b + l` is in the shell: the same f32 operations as
+    /// `q.distance_squared(p)`, (q − p) · (q − p) summed x, y, z.
+    #[inline(always)]
+    fn shell_lanes(&self, b: usize, p: Vec3, near2: f32, far2: f32) -> u32 {
+        let (x, y, z) = (
+            &self.x[b..b + LANES],
+            &self.y[b..b + LANES],
+            &self.z[b..b + LANES],
+        );
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: SSE2 is part of x86_64; each load reads 4 floats of a slice of 8.
+            unsafe {
+                let (px, py, pz) = (_mm_set1_ps(p.x), _mm_set1_ps(p.y), _mm_set1_ps(p.z));
+                let (near, far) = (_mm_set1_ps(near2), _mm_set1_ps(far2));
+                let mut hits = 0;
+                for h in [0, 4] {
+                    let dx = _mm_sub_ps(_mm_loadu_ps(x[h..].as_ptr()), px);
+                    let dy = _mm_sub_ps(_mm_loadu_ps(y[h..].as_ptr()), py);
+                    let dz = _mm_sub_ps(_mm_loadu_ps(z[h..].as_ptr()), pz);
+                    let d2 = _mm_add_ps(
+                        _mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
+                        _mm_mul_ps(dz, dz),
+                    );
+                    let m = _mm_and_ps(_mm_cmpge_ps(d2, near), _mm_cmplt_ps(d2, far));
+                    hits |= (_mm_movemask_ps(m) as u32) << h;
+                }
+                hits
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let mut hits = 0;
+            for l in 0..LANES {
+                let (dx, dy, dz) = (x[l] - p.x, y[l] - p.y, z[l] - p.z);
+                let d2 = dx * dx + dy * dy + dz * dz;
+                hits |= u32::from(d2 >= near2 && d2 < far2) << l;
+            }
+            hits
         }
     }
 }
@@ -81,19 +265,51 @@ mod tests {
             })
             .collect();
         let mut idx = CellIndex::default();
-        idx.build(pts.iter().copied(), 0.3);
+        idx.build(&pts, 0.3);
         for &p in &pts[..50] {
             let mut got = Vec::new();
-            idx.for_each_near(p, |j| {
-                if pts[j].distance(p) < 0.3 {
-                    got.push(j)
-                }
+            idx.for_each_in_shell(p, 0.08, 0.3, |j, q| {
+                assert_eq!(q, pts[j]);
+                got.push(j)
             });
             got.sort_unstable();
             let want: Vec<usize> = (0..pts.len())
-                .filter(|&j| pts[j].distance(p) < 0.3)
+                .filter(|&j| (0.08 * 0.08..0.3 * 0.3).contains(&pts[j].distance_squared(p)))
                 .collect();
             assert_eq!(got, want);
+        }
+    }
+
+    #[test]
+    fn the_dense_table_and_the_sorted_keys_visit_in_the_same_order() {
+        // One agent 1 km away makes the box of occupied cells too large for a table, so
+        // the second index falls back to sorted keys; every query visits the same
+        // agents in the same order (what keeps Eq. 6's float sums identical).
+        let mut rng = crate::math::Rng::new(11, 0, 0);
+        let mut pts: Vec<Vec3> = (0..400)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-0.5, 0.5),
+                    rng.range(-1.0, 1.0),
+                )
+            })
+            .collect();
+        let (mut dense, mut sparse) = (CellIndex::default(), CellIndex::default());
+        dense.build(&pts, 0.3);
+        pts.push(Vec3::splat(1000.0));
+        sparse.build(&pts, 0.3);
+        assert!(matches!(dense.lookup, Lookup::Dense { .. }));
+        assert!(matches!(sparse.lookup, Lookup::Sparse(_)));
+        for &p in &pts[..100] {
+            let visit = |idx: &CellIndex| {
+                let mut order = Vec::new();
+                idx.for_each_in_shell(p, 0.05, 0.3, |j, _| order.push(j));
+                order
+            };
+            let order = visit(&dense);
+            assert!(!order.is_empty());
+            assert_eq!(order, visit(&sparse));
         }
     }
 }
