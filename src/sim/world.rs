@@ -104,6 +104,9 @@ trait Swarm: Send + Sync {
     fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     fn reach(&self) -> f32;
     fn lists_neighbours(&self) -> bool;
+    /// The world may keep this swarm's neighbour candidates (`Model::KEEPS_CANDIDATES`, or
+    /// it lists no neighbours).
+    fn keeps_candidates(&self) -> bool;
     fn target_particle_spacing(&self) -> Option<f32>;
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
     /// Fills the frame record of this swarm.
@@ -382,6 +385,10 @@ where
 
     fn lists_neighbours(&self) -> bool {
         M::GATHERS || self.model.lists_neighbours()
+    }
+
+    fn keeps_candidates(&self) -> bool {
+        M::KEEPS_CANDIDATES || !self.lists_neighbours()
     }
 
     fn target_particle_spacing(&self) -> Option<f32> {
@@ -716,6 +723,13 @@ impl Simulation {
             .iter()
             .map(|s| s.reach() + 2.0 * max_body_radius)
             .fold(0.0, f32::max);
+        // Candidates only where every model that lists neighbours opts in (`Model::
+        // KEEPS_CANDIDATES`); otherwise no skin, and the lists are the grid's, as before.
+        let skin_fraction = if swarms.iter().all(|s| s.keeps_candidates()) {
+            SKIN_FRACTION
+        } else {
+            0.0
+        };
         let mut sim = Simulation {
             frame: shot.frame_start,
             obstacles_before: shot.obstacles.iter().map(|_| None).collect(),
@@ -739,7 +753,7 @@ impl Simulation {
             keeps: false,
             previous: Vec::new(),
             sorted: false,
-            skin_fraction: SKIN_FRACTION,
+            skin_fraction,
             max_body_radius,
             step_index: 0,
             record: Vec::new(),
@@ -1034,6 +1048,9 @@ impl Simulation {
     /// R + σ, grow as (1 + σ/R)³; none when not even one fits (no skin: every substep
     /// queries the grid). Should an agent outrun the skin, the check rebuilds earlier.
     fn skin_for(&self, substep: u32) -> f32 {
+        if self.skin_fraction == 0.0 {
+            return 0.0; // no candidates for this shot's models
+        }
         let left = self.shot.substeps.saturating_sub(substep + 1);
         if left == 0 {
             return 0.0;
