@@ -39,6 +39,9 @@ impl CurlNoise {
     }
 
     /// F_curl at `p` (metres), as an acceleration in m/s².
+    // Inlined into the models' steps, as the compiler chose by itself before other code
+    // moved it into another unit.
+    #[inline]
     pub fn force(&self, p: Vec3) -> Vec3 {
         let xi = p * self.inv_cell;
         // The three potentials differ by their permutation tables alone, so they share

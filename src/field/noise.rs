@@ -258,6 +258,9 @@ pub struct LatticePoint {
 }
 
 impl LatticePoint {
+    // Inlined into its callers, as the compiler chose by itself before other code moved it
+    // into another unit (a call per sample in the bee's step otherwise).
+    #[inline]
     pub fn new(x: Vec3) -> Self {
         let (ix, fx) = split(x.x);
         let (iy, fy) = split(x.y);

@@ -333,6 +333,80 @@ impl Grid {
         best.len
     }
 
+    /// Writes into `out` every point strictly within `radius` of `p` (any radius, unlike
+    /// [`Grid::nearest`]), leaving out index `skip`, with its squared distance; returns
+    /// how many, or `None` if they do not fit in `out`. The rows of cells the sphere's box
+    /// covers, each trimmed to the sphere's chord, in a fixed order (the squared distances
+    /// are computed exactly as `nearest` computes them). For candidate lists reused over
+    /// substeps (`crate::sim::skin`).
+    pub fn within(
+        &self,
+        p: Vec3,
+        radius: f32,
+        skip: usize,
+        out: &mut [(u32, f32)],
+    ) -> Option<usize> {
+        if self.items.is_empty() {
+            return Some(0);
+        }
+        let (d, o) = (self.dims, self.origin);
+        let r2 = radius * radius;
+        let (lo, hi) = (
+            self.cell_of(p - Vec3::splat(radius)),
+            self.cell_of(p + Vec3::splat(radius)),
+        );
+        let (px, py, pz) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z));
+        let last = (d.x - 1) as f32;
+        let mut len = 0;
+        for z in lo.z..=hi.z {
+            let dz2 = self.slab_d2(p.z, o.z, z);
+            if dz2 >= r2 {
+                continue;
+            }
+            for y in lo.y..=hi.y {
+                let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
+                if dyz2 >= r2 {
+                    continue;
+                }
+                let w = (r2 - dyz2).sqrt();
+                // max/min rather than `clamp`, whose checks cost more than the rest here.
+                let a = ((p.x - w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
+                let b = ((p.x + w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
+                let row = (d.x * (y + d.y * z)) as usize;
+                let (s, e) = (
+                    self.starts[row + a] as usize,
+                    self.starts[row + b + 1] as usize,
+                );
+                // Four at a time, as `Scan::run` (the arrays are padded past the end).
+                let end = e + LANES - 1;
+                let (xs, ys, zs) = (&self.xs[s..end], &self.ys[s..end], &self.zs[s..end]);
+                let items = &self.items[s..e];
+                let mut g = 0;
+                while g < e - s {
+                    let dx = Vec4::from_slice(&xs[g..]) - px;
+                    let dy = Vec4::from_slice(&ys[g..]) - py;
+                    let dz = Vec4::from_slice(&zs[g..]) - pz;
+                    let d2 = dx * dx + dy * dy + dz * dz;
+                    let mut hits = d2.cmplt(Vec4::splat(r2)).bitmask();
+                    if e - s - g < LANES {
+                        hits &= (1 << (e - s - g)) - 1;
+                    }
+                    while hits != 0 {
+                        let m = hits.trailing_zeros() as usize;
+                        hits &= hits - 1;
+                        let j = items[g + m];
+                        if j as usize != skip {
+                            *out.get_mut(len)? = (j, d2[m]);
+                            len += 1;
+                        }
+                    }
+                    g += LANES;
+                }
+            }
+        }
+        Some(len)
+    }
+
     /// The distance within which a query in cell `c` should find `k` points, from the
     /// points in the (up to) 27 cells around it taken as a uniform density, with a margin
     /// of `GUESS_MARGIN`: in a uniform crowd fewer than k lie within it in about 8 % of

@@ -49,9 +49,34 @@ impl Default for NeighbourList {
 
 impl NeighbourList {
     /// Lists the (at most `MAX_NEIGHBOURS`) agents nearest `p` within `radius`, other than
-    /// agent `me`.
+    /// agent `me`, in the grid's order.
     pub(crate) fn fill(&mut self, grid: &Grid, p: Vec3, radius: f32, me: usize) {
         self.len = grid.nearest(p, radius, MAX_NEIGHBOURS, me, &mut self.idx) as u8;
+    }
+
+    /// Puts the list in increasing index order (insertion sort: at most 16 entries): the
+    /// order lists reused over substeps (`crate::sim::skin`) are kept in, so that a list
+    /// found by the grid and one picked from candidates are the same list, and every sum
+    /// over it the same sum.
+    pub(crate) fn sort(&mut self) {
+        let idx = &mut self.idx[..self.len as usize];
+        for i in 1..idx.len() {
+            let v = idx[i];
+            let mut j = i;
+            while j > 0 && idx[j - 1] > v {
+                idx[j] = idx[j - 1];
+                j -= 1;
+            }
+            idx[j] = v;
+        }
+    }
+
+    /// Appends agent `j` (callers append in increasing index order, and at most
+    /// `MAX_NEIGHBOURS`).
+    #[inline]
+    pub(crate) fn push(&mut self, j: u32) {
+        self.idx[self.len as usize] = j;
+        self.len += 1;
     }
 
     /// Empties the list (for a model that reads none).

@@ -245,7 +245,7 @@ pub fn turn_towards(yaw: f32, dir: Vec3, rate: f32, dt: f32) -> f32 {
 
 /// The pull of targets `targets` (scaled by `attraction`) on an agent at `pos`, plus the
 /// pull back into `bounds` (centre, half extents) with gain `containment`, m/s².
-#[inline]
+#[inline(always)]
 pub fn pull(
     cx: &Context,
     targets: &[usize],

@@ -219,6 +219,12 @@ pub trait Model: Sized + Send + Sync {
     const INFO: ModelInfo;
     /// Whether the model has a gather pass (paper 000's SPH density) before the step.
     const GATHERS: bool = false;
+    /// Whether the world may reuse this model's neighbour candidates over substeps (`sim::
+    /// skin`). Reused lists come in index order, not the grid's, which changes the last
+    /// bits of sums over neighbours; a model opts in once its results were checked with
+    /// them (zonal). The bee and boids do not: their caches stay as without candidates,
+    /// even where they fly slowly enough to keep some (the mosquito cage).
+    const KEEPS_CANDIDATES: bool = false;
     /// The channel and value that mark an agent hidden at a frame in the recording (a bee
     /// inside its hive: `state` 3), so that the writers can hide it; the same agents as
     /// `Agent::hidden`. `None`: the model never hides one.

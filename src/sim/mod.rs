@@ -1,6 +1,7 @@
 //! The simulation: world state, stepping, neighbour grid, and what is recorded.
 pub mod agent_bytes;
 pub mod frame;
+pub mod skin;
 
 pub mod world;
 

@@ -7,6 +7,7 @@
 
 use super::agent_bytes::AgentBytes;
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
+use super::skin;
 use crate::geometry::{self, Grid, Shape};
 use crate::math::{Rng, normalize_or};
 use crate::model::context::NeighbourList;
@@ -36,6 +37,34 @@ struct Runner<M: Model> {
     order: Vec<u32>,
     rank: Vec<u32>,
     gathered: Vec<(NeighbourList, (f32, f32))>,
+    /// Neighbour candidates kept at the last rebuild (`super::skin`), agent after agent
+    /// in the gather's order, and each agent's range of them (by agent; `NO_CANDIDATES`:
+    /// queried afresh every substep).
+    candidates: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+}
+
+/// The largest skin, as a fraction of the largest neighbour radius. A rebuild searches out
+/// to R + σ, (1 + σ/R)³ times the volume a fresh query covers, and the candidates grow
+/// alike; measured (callgrind, `bench`, 10,000 agents): the bee and boids (about 1 cm per
+/// substep, R 0.15 m, so σ/R of 0.15–0.3 for one reused substep) cost 6–18 % more per
+/// step with lists than without, zonal's midges (0.3 mm per substep, R 0.27 m: σ/R
+/// 0.013 for the whole frame) 9 % less (only zonal opts in: `Model::KEEPS_CANDIDATES`).
+const SKIN_FRACTION: f32 = 0.05;
+
+/// An agent without candidates (too many: a crowd).
+const NO_CANDIDATES: (u32, u32) = (u32::MAX, 0);
+
+/// How the gather pass lists neighbours this substep.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Listing {
+    /// From the grid, for every agent (no candidates kept).
+    Fresh,
+    /// From the grid, keeping candidates for a skin of σ metres (`super::skin`).
+    Build(f32),
+    /// From the candidates of the last `Build` (the grid is stale unless some agent has
+    /// none, in which case it was rebuilt for those).
+    Reuse,
 }
 
 /// What the gather pass reads of the world.
@@ -44,7 +73,14 @@ struct Gather<'a> {
     grid: &'a Grid,
     /// Every agent's global index, in the grid's cell order.
     order: &'a [u32],
+    /// The grid was rebuilt this substep (its order changed).
+    regrid: bool,
+    listing: Listing,
+    /// Lists found afresh are put in index order too (see `Simulation::sorted`).
+    sort: bool,
     agents: &'a [Neighbour],
+    /// Every agent's position now, by global index.
+    positions: &'a [Vec3],
     targets: &'a [TargetNow],
     max_body_radius: f32,
     cancel: &'a AtomicBool,
@@ -56,12 +92,21 @@ trait Swarm: Send + Sync {
     /// Writes the agents' neighbour records, and which agents are out of the world for
     /// now (`Agent::hidden`: no one's neighbour) (pass 0).
     fn neighbour_records(&self, out: &mut [Neighbour], hidden: &mut [bool], mass: f32, radius: f32);
-    /// Lists each agent's neighbours and runs the model's gather pass (pass 1).
-    fn gather(&mut self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]);
+    /// Lists each agent's neighbours and runs the model's gather pass (pass 1); true if
+    /// some agent keeps no candidates (so needs a fresh grid every substep).
+    fn gather(
+        &mut self,
+        w: &Gather,
+        lists: &mut [NeighbourList],
+        gathered: &mut [(f32, f32)],
+    ) -> bool;
     /// Steps every agent into the second buffer and swaps (pass 2).
     fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     fn reach(&self) -> f32;
     fn lists_neighbours(&self) -> bool;
+    /// The world may keep this swarm's neighbour candidates (`Model::KEEPS_CANDIDATES`, or
+    /// it lists no neighbours).
+    fn keeps_candidates(&self) -> bool;
     fn target_particle_spacing(&self) -> Option<f32>;
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
     /// Fills the frame record of this swarm.
@@ -107,74 +152,200 @@ where
             });
     }
 
-    fn gather(&mut self, w: &Gather, lists: &mut [NeighbourList], gathered: &mut [(f32, f32)]) {
+    fn gather(
+        &mut self,
+        w: &Gather,
+        lists: &mut [NeighbourList],
+        gathered: &mut [(f32, f32)],
+    ) -> bool {
         let Gather {
             grid,
             order,
+            regrid,
+            listing,
+            sort,
             agents,
+            positions,
             targets,
             max_body_radius,
             cancel,
         } = *w;
         if !self.lists_neighbours() {
             lists.iter_mut().for_each(NeighbourList::clear);
-            return;
+            return false;
         }
         let (m, start, n) = (&self.model, self.start, self.agents.len());
         // Agents are queried in the grid's cell order, not by index: neighbouring queries
         // then read the same rows of the grid and the same neighbours, which stay in cache
         // (a hundred thousand agents' grid and records do not). Each query is a fixed
-        // function of its agent and the grid, so the order changes no result.
-        self.order.clear();
-        if start == 0 && order.len() == n {
-            self.order.extend_from_slice(order);
-        } else {
-            let range = start as u32..(start + n) as u32;
-            self.order.extend(
-                order
-                    .iter()
-                    .filter(|i| range.contains(i))
-                    .map(|&i| i - start as u32),
-            );
-        }
-        self.rank.clear();
-        self.rank.resize(n, u32::MAX);
-        for (t, &k) in self.order.iter().enumerate() {
-            self.rank[k as usize] = t as u32;
-        }
-        // Agents the grid leaves out (bees inside their hive) are queried too, after the
-        // others, in index order: every agent gets its list and sums, as before the order.
-        if self.order.len() < n {
-            for k in 0..n {
-                if self.rank[k] == u32::MAX {
-                    self.rank[k] = self.order.len() as u32;
-                    self.order.push(k as u32);
+        // function of its agent and the grid (or its candidates), so the order changes no
+        // result. Between rebuilds the order is the last grid's.
+        if regrid || self.order.len() != n {
+            self.order.clear();
+            if start == 0 && order.len() == n {
+                self.order.extend_from_slice(order);
+            } else {
+                let range = start as u32..(start + n) as u32;
+                self.order.extend(
+                    order
+                        .iter()
+                        .filter(|i| range.contains(i))
+                        .map(|&i| i - start as u32),
+                );
+            }
+            self.rank.clear();
+            self.rank.resize(n, u32::MAX);
+            for (t, &k) in self.order.iter().enumerate() {
+                self.rank[k as usize] = t as u32;
+            }
+            // Agents the grid leaves out (bees inside their hive) are queried too, after
+            // the others, in index order: every agent gets its list and sums.
+            if self.order.len() < n {
+                for k in 0..n {
+                    if self.rank[k] == u32::MAX {
+                        self.rank[k] = self.order.len() as u32;
+                        self.order.push(k as u32);
+                    }
                 }
             }
         }
-        self.gathered.clear();
-        self.gathered
-            .par_extend(self.order.par_iter().with_min_len(256).map(|&k| {
-                let mut list = NeighbourList::default();
-                // Cancelled: the rest of this pass is skipped (the state is abandoned).
-                if cancel.load(Ordering::Relaxed) {
-                    return (list, (0.0, 0.0));
+        // The model's gather sums over a list: the agent's own term, then its neighbours'.
+        let sums = |i: usize, list: &NeighbourList| -> (f32, f32) {
+            if !M::GATHERS {
+                return (0.0, 0.0);
+            }
+            let me = &agents[i];
+            let ri = me.radius;
+            let mut sum = m.gather_term(ri, me, 0.0);
+            for &j in list.indices() {
+                let o = &agents[j as usize];
+                sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
+            }
+            m.gather_finish(targets, me.pos, ri, sum)
+        };
+        let radius = |i: usize| m.reach() + agents[i].radius + max_body_radius;
+        let fresh = match listing {
+            // A frame that keeps no candidates: the grid's lists in the grid's order.
+            Listing::Fresh if !sort => {
+                self.gathered.clear();
+                self.gathered
+                    .par_extend(self.order.par_iter().with_min_len(256).map(|&k| {
+                        let mut list = NeighbourList::default();
+                        // Cancelled: the rest of this pass is skipped (the state is abandoned).
+                        if cancel.load(Ordering::Relaxed) {
+                            return (list, (0.0, 0.0));
+                        }
+                        // As `sums`, written out: the closure, used three times, is not
+                        // inlined, and the call costs the bee about 1 % (callgrind).
+                        let i = start + k as usize;
+                        let me = &agents[i];
+                        let ri = me.radius;
+                        list.fill(grid, me.pos, m.reach() + ri + max_body_radius, i);
+                        if !M::GATHERS {
+                            return (list, (0.0, 0.0));
+                        }
+                        let mut sum = m.gather_term(ri, me, 0.0);
+                        for &j in list.indices() {
+                            let o = &agents[j as usize];
+                            sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
+                        }
+                        (list, m.gather_finish(targets, me.pos, ri, sum))
+                    }));
+                true
+            }
+            Listing::Fresh | Listing::Reuse => {
+                let (candidates, ranges) = (&self.candidates, &self.ranges);
+                let reuse = listing == Listing::Reuse;
+                self.gathered.clear();
+                self.gathered
+                    .par_extend(self.order.par_iter().with_min_len(256).map(|&k| {
+                        let mut list = NeighbourList::default();
+                        // Cancelled: the rest of this pass is skipped (the state is abandoned).
+                        if cancel.load(Ordering::Relaxed) {
+                            return (list, (0.0, 0.0));
+                        }
+                        let i = start + k as usize;
+                        let (from, len) = if reuse {
+                            ranges[k as usize]
+                        } else {
+                            NO_CANDIDATES
+                        };
+                        if from == u32::MAX {
+                            list.fill(grid, positions[i], radius(i), i);
+                            // Among reused lists, in their order (see `Simulation::sorted`).
+                            if reuse || sort {
+                                list.sort();
+                            }
+                        } else {
+                            let c = &candidates[from as usize..(from + len) as usize];
+                            skin::reselect(c, positions, positions[i], radius(i), &mut list);
+                        }
+                        (list, sums(i, &list))
+                    }));
+                !reuse || self.ranges.contains(&NO_CANDIDATES)
+            }
+            Listing::Build(sigma) => {
+                // In chunks of the gather's order, each with its own candidates (joined
+                // below in that order: the same whatever the number of threads).
+                const CHUNK: usize = 256;
+                self.gathered.clear();
+                self.gathered
+                    .resize(n, (NeighbourList::default(), (0.0, 0.0)));
+                let chunks: Vec<(Vec<u32>, Vec<u32>)> = self
+                    .gathered
+                    .par_chunks_mut(CHUNK)
+                    .zip(self.order.par_chunks(CHUNK))
+                    .map(|(out, ks)| {
+                        let mut candidates = Vec::new();
+                        let mut lens = Vec::with_capacity(ks.len());
+                        let mut scratch = vec![(0u32, 0.0f32); skin::SCRATCH];
+                        for (g, &k) in out.iter_mut().zip(ks) {
+                            if cancel.load(Ordering::Relaxed) {
+                                lens.push(u32::MAX);
+                                continue;
+                            }
+                            let i = start + k as usize;
+                            let before = candidates.len();
+                            let kept = skin::build(
+                                grid,
+                                positions,
+                                positions[i],
+                                i,
+                                radius(i),
+                                sigma,
+                                &mut g.0,
+                                &mut candidates,
+                                &mut scratch,
+                            );
+                            lens.push(if kept {
+                                (candidates.len() - before) as u32
+                            } else {
+                                u32::MAX
+                            });
+                            g.1 = sums(i, &g.0);
+                        }
+                        (candidates, lens)
+                    })
+                    .collect();
+                self.candidates.clear();
+                self.ranges.clear();
+                self.ranges.resize(n, NO_CANDIDATES);
+                let mut fresh = false;
+                for ((candidates, lens), ks) in chunks.iter().zip(self.order.chunks(CHUNK)) {
+                    let mut at = self.candidates.len() as u32;
+                    for (&len, &k) in lens.iter().zip(ks) {
+                        if len == u32::MAX {
+                            fresh = true;
+                        } else {
+                            self.ranges[k as usize] = (at, len);
+                            at += len;
+                        }
+                    }
+                    self.candidates.extend_from_slice(candidates);
                 }
-                let i = start + k as usize;
-                let me = &agents[i];
-                let ri = me.radius;
-                list.fill(grid, me.pos, m.reach() + ri + max_body_radius, i);
-                if !M::GATHERS {
-                    return (list, (0.0, 0.0));
-                }
-                // The agent's own term, then its neighbours'.
-                let mut sum = m.gather_term(ri, me, 0.0);
-                for &j in list.indices() {
-                    let o = &agents[j as usize];
-                    sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
-                }
-                (list, m.gather_finish(targets, me.pos, ri, sum))
-            }));
+                fresh
+            }
+        };
         // Back into index order.
         let sorted = &self.gathered;
         lists
@@ -183,6 +354,7 @@ where
             .zip(self.rank.par_iter())
             .with_min_len(1024)
             .for_each(|((list, g), &t)| (*list, *g) = sorted[t as usize]);
+        fresh
     }
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
@@ -213,6 +385,10 @@ where
 
     fn lists_neighbours(&self) -> bool {
         M::GATHERS || self.model.lists_neighbours()
+    }
+
+    fn keeps_candidates(&self) -> bool {
+        M::KEEPS_CANDIDATES || !self.lists_neighbours()
     }
 
     fn target_particle_spacing(&self) -> Option<f32> {
@@ -311,6 +487,27 @@ pub struct Simulation {
     positions: Vec<Vec3>,
     grid: Grid,
     grid_cell: f32,
+    /// Neighbour candidates (`super::skin`): the skin σ of the last rebuild, m (0: none
+    /// kept), the positions and hidden flags then, whether some agent keeps none (the
+    /// grid is then rebuilt every substep for it), whether an agent was placed since, and
+    /// how many rebuilds there were (for tests).
+    skin: f32,
+    built: Vec<Vec3>,
+    built_hidden: Vec<bool>,
+    needs_grid: bool,
+    placed: bool,
+    rebuilds: u64,
+    /// This frame keeps candidates (decided at its first substep): only then are the
+    /// positions of the last substep kept, in `previous`.
+    keeps: bool,
+    previous: Vec<Vec3>,
+    /// Some substep of this frame kept candidates: every list of the rest of the frame is
+    /// in index order, found afresh or not, so that when the lists are rebuilt (a fast
+    /// agent) changes no sum. A frame without a skin keeps the grid's order and skips
+    /// the sort.
+    sorted: bool,
+    /// The largest skin, as a fraction of the grid's cell ([`SKIN_FRACTION`]).
+    skin_fraction: f32,
     /// Largest body radius of any agent, m: bounds every contact distance.
     max_body_radius: f32,
     frame: i32,
@@ -486,6 +683,8 @@ impl Simulation {
                     order: Vec::new(),
                     rank: Vec::new(),
                     gathered: Vec::new(),
+                    candidates: Vec::new(),
+                    ranges: Vec::new(),
                 })
             }));
             first += s.count;
@@ -524,6 +723,13 @@ impl Simulation {
             .iter()
             .map(|s| s.reach() + 2.0 * max_body_radius)
             .fold(0.0, f32::max);
+        // Candidates only where every model that lists neighbours opts in (`Model::
+        // KEEPS_CANDIDATES`); otherwise no skin, and the lists are the grid's, as before.
+        let skin_fraction = if swarms.iter().all(|s| s.keeps_candidates()) {
+            SKIN_FRACTION
+        } else {
+            0.0
+        };
         let mut sim = Simulation {
             frame: shot.frame_start,
             obstacles_before: shot.obstacles.iter().map(|_| None).collect(),
@@ -538,6 +744,16 @@ impl Simulation {
             positions: Vec::new(),
             grid: Grid::default(),
             grid_cell,
+            skin: 0.0,
+            built: Vec::new(),
+            built_hidden: Vec::new(),
+            needs_grid: true,
+            placed: true,
+            rebuilds: 0,
+            keeps: false,
+            previous: Vec::new(),
+            sorted: false,
+            skin_fraction,
             max_body_radius,
             step_index: 0,
             record: Vec::new(),
@@ -554,6 +770,7 @@ impl Simulation {
         for s in &mut self.swarms {
             if k < s.len() {
                 s.place(k, position, velocity);
+                self.placed = true;
                 break;
             }
             k -= s.len();
@@ -647,7 +864,7 @@ impl Simulation {
                 return false;
             }
             let t = self.time() + (k as f64) * self.shot.dt();
-            self.step(t, dt);
+            self.step(t, dt, k);
         }
         if self.cancel.load(Ordering::Relaxed) {
             return false;
@@ -675,8 +892,9 @@ impl Simulation {
         place_obstacles(&mut self.obstacles, &self.shot, frame(t + dt));
     }
 
-    /// One integration step of `dt` seconds starting at time `t`.
-    fn step(&mut self, t: f64, dt: f32) {
+    /// One integration step of `dt` seconds starting at time `t`, substep `substep` of
+    /// the frame.
+    fn step(&mut self, t: f64, dt: f32, substep: u32) {
         let n = self.shot.bee_count();
         if n == 0 {
             return;
@@ -702,10 +920,17 @@ impl Simulation {
         }
         // The grid only for shots where some model reads neighbours; hidden agents (bees
         // inside their hive) are not in it, so no one meets them.
-        if self.swarms.iter().any(|s| s.lists_neighbours()) {
+        let lists = self.swarms.iter().any(|s| s.lists_neighbours());
+        let mut listing = Listing::Fresh;
+        let mut regrid = lists;
+        if lists {
             self.positions.clear();
             self.positions
                 .par_extend(self.agents.par_iter().map(|a| a.pos));
+            listing = self.listing(substep);
+            regrid = listing != Listing::Reuse || self.needs_grid;
+        }
+        if regrid {
             // (A shot without a hive skips the flags: the common case costs nothing.)
             let except: &[bool] = if self.hidden.contains(&true) {
                 &self.hidden
@@ -722,15 +947,23 @@ impl Simulation {
         let shared = Gather {
             grid: &self.grid,
             order: self.grid.order(),
+            regrid,
+            listing,
+            sort: self.sorted,
             agents: &self.agents,
+            positions: &self.positions,
             targets: &self.targets,
             max_body_radius: self.max_body_radius,
             cancel: self.cancel,
         };
         let per_swarm =
             split(&mut self.lists, &self.swarms).zip(split(&mut self.gathered, &self.swarms));
+        let mut needs_grid = false;
         for (swarm, (lists, gathered)) in self.swarms.iter_mut().zip(per_swarm) {
-            swarm.gather(&shared, lists, gathered);
+            needs_grid |= swarm.gather(&shared, lists, gathered);
+        }
+        if listing != Listing::Reuse {
+            self.needs_grid = needs_grid;
         }
         for (a, &(d, p)) in self.agents.iter_mut().zip(&self.gathered) {
             a.density = d;
@@ -755,6 +988,93 @@ impl Simulation {
             swarm.step(&cx, self.cancel);
         }
         self.step_index += 1;
+    }
+
+    /// Whether this substep (`substep` of the frame) reuses the neighbour candidates of
+    /// the last rebuild or rebuilds them, and with what skin (`super::skin`); a rebuild
+    /// records the positions and hidden flags it was made at.
+    fn listing(&mut self, substep: u32) -> Listing {
+        // Whether this frame may keep candidates at all is decided once, at its first
+        // substep, from the state alone (as in a run resumed there). A frame that keeps
+        // none (the bee, boids: too fast, and not opted in) costs nothing more than plain grid
+        // queries: no displacement checks, no copies of positions.
+        if substep == 0 {
+            self.sorted = false;
+            self.skin = self.skin_for(0);
+            self.keeps = self.skin > 0.0;
+        } else if !self.keeps {
+            self.rebuilds += 1;
+            return Listing::Fresh;
+        }
+        let n = self.positions.len();
+        // Every agent has moved at most σ/2 since the rebuild; the largest displacement is
+        // a maximum, the same in any order.
+        let reuse = substep > 0
+            && self.skin > 0.0
+            && !self.placed
+            && self.built.len() == n
+            && self.hidden == self.built_hidden
+            && 2.0 * largest_move(&self.positions, &self.built) <= self.skin;
+        let listing = if reuse {
+            Listing::Reuse
+        } else {
+            self.placed = false;
+            self.rebuilds += 1;
+            if substep > 0 {
+                self.skin = self.skin_for(substep);
+            }
+            if self.skin > 0.0 {
+                self.sorted = true;
+                self.built.clone_from(&self.positions);
+                self.built_hidden.clone_from(&self.hidden);
+                Listing::Build(self.skin)
+            } else {
+                Listing::Fresh
+            }
+        };
+        // The last substep's moves, for a later rebuild's skin (`skin_for`).
+        if self.keeps {
+            self.previous.clone_from(&self.positions);
+        }
+        listing
+    }
+
+    /// The skin σ for a rebuild at substep `substep` of the frame, m. σ/2 must cover the
+    /// moves until the next rebuild: a move is the fastest agent's speed times the substep
+    /// (or the largest move over the last substep, if larger: some models' agents report no
+    /// velocity), with 10 % for acceleration. The lists are kept for as many of the
+    /// substeps left in the frame as a skin of at most `skin_fraction` of the grid's cell
+    /// (the largest radius) covers, since the candidates, and a rebuild's search out to
+    /// R + σ, grow as (1 + σ/R)³; none when not even one fits (no skin: every substep
+    /// queries the grid). Should an agent outrun the skin, the check rebuilds earlier.
+    fn skin_for(&self, substep: u32) -> f32 {
+        if self.skin_fraction == 0.0 {
+            return 0.0; // no candidates for this shot's models
+        }
+        let left = self.shot.substeps.saturating_sub(substep + 1);
+        if left == 0 {
+            return 0.0;
+        }
+        let fastest = self
+            .agents
+            .par_iter()
+            .with_min_len(4096)
+            .map(|a| a.vel.length_squared())
+            .reduce(|| 0.0, f32::max)
+            .sqrt();
+        let most = self.skin_fraction * self.grid_cell;
+        let mut step = fastest * self.shot.dt() as f32;
+        if 2.0 * 1.1 * step > most {
+            return 0.0; // too fast for even one reused substep
+        }
+        // The last substep's moves only within a frame: the first substep's skin depends on
+        // the state alone, as in a run resumed there.
+        if substep > 0 && self.previous.len() == self.positions.len() {
+            step = step.max(largest_move(&self.positions, &self.previous));
+        }
+        let per_move = 2.0 * 1.1 * step;
+        let moves = left.min((most / per_move.max(1e-12)) as u32);
+        per_move * moves as f32
     }
 
     /// The whole evolving state — frame, step count and every agent — as bytes, for a
@@ -811,6 +1131,7 @@ impl Simulation {
         }
         self.frame = frame;
         self.step_index = step_index;
+        self.placed = true;
         self.update_record();
         Ok(())
     }
@@ -842,6 +1163,17 @@ fn place_obstacles(shapes: &mut [Shape], shot: &Shot, frame: f64) {
     }
 }
 
+/// The largest distance between `now` and `then`, agent by agent, m: a maximum, the same
+/// whatever the order (and the thread count).
+fn largest_move(now: &[Vec3], then: &[Vec3]) -> f32 {
+    now.par_iter()
+        .zip(then.par_iter())
+        .with_min_len(4096)
+        .map(|(p, b)| p.distance_squared(*b))
+        .reduce(|| 0.0, f32::max)
+        .sqrt()
+}
+
 /// A per-agent array cut into one slice per swarm, in shot order.
 fn split<'a, T>(
     mut all: &'a mut [T],
@@ -853,4 +1185,133 @@ fn split<'a, T>(
         all = tail;
         head
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `beeswarm bench`'s scene: `bees` agents of `model` at 500 per m³ in soft bounds.
+    fn sim(model: &str, bees: usize) -> Simulation {
+        let side = (bees as f64 / 500.0).cbrt();
+        let c = side / 2.0 + 0.5;
+        let src = format!(
+            "[scene]\nname = \"skin\"\nfps = 24\nframes = [1, 5]\nsubsteps = 4\nseed = 1\n\
+             [[swarm]]\ncount = {bees}\nmodel = \"{model}\"\n\
+             spawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n\
+             bounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n"
+        );
+        let here = std::path::Path::new(".");
+        let shot = crate::shot::parse(&src, std::path::Path::new("<test>"), here).expect("shot");
+        Simulation::new(&shot)
+    }
+
+    fn positions(s: &Simulation) -> Vec<[u32; 3]> {
+        s.record()
+            .iter()
+            .flat_map(|f| f.position.iter().map(|p| p.to_array().map(f32::to_bits)))
+            .collect()
+    }
+
+    /// One substep of frame `s.frame()`, as `advance` runs it.
+    fn substep(s: &mut Simulation, k: u32) {
+        let dt = s.shot.dt();
+        let t = s.time() + k as f64 * dt;
+        s.step(t, dt as f32, k);
+    }
+
+    #[test]
+    fn reused_lists_step_exactly_as_fresh_ones() {
+        // Lists picked from candidates are the lists the grid finds, in the same order: a
+        // run that reuses them steps bit for bit as one that rebuilds them every substep.
+        // The bee (its density sums) with a skin forced wide enough to be reused, and
+        // zonal with its own.
+        for (model, fraction) in [("bee", 1.0), ("zonal", SKIN_FRACTION)] {
+            let mut reused = sim(model, 400);
+            let mut rebuilt = sim(model, 400);
+            reused.skin_fraction = fraction;
+            rebuilt.skin_fraction = fraction;
+            for _ in 0..3 {
+                for k in 0..4 {
+                    substep(&mut reused, k);
+                    rebuilt.placed = true;
+                    substep(&mut rebuilt, k);
+                }
+                for s in [&mut reused, &mut rebuilt] {
+                    s.frame += 1;
+                    s.update_record();
+                }
+                assert_eq!(positions(&reused), positions(&rebuilt), "{model}");
+            }
+            assert!(
+                reused.rebuilds < rebuilt.rebuilds,
+                "{model}: lists were reused ({} rebuilds of {})",
+                reused.rebuilds,
+                rebuilt.rebuilds
+            );
+        }
+    }
+
+    #[test]
+    fn reused_lists_resume_from_a_checkpoint_and_ignore_the_thread_count() {
+        // Zonal reuses its lists over each frame; a run restored between frames (a
+        // checkpoint) and runs on 1 and 3 threads step bit for bit alike.
+        let run = |threads: usize, resume: bool| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut s = sim("zonal", 2000);
+                for _ in 0..2 {
+                    s.advance();
+                }
+                if resume {
+                    let state = s.state_bytes();
+                    s = sim("zonal", 2000);
+                    s.restore_state(&state).unwrap();
+                }
+                for _ in 0..2 {
+                    s.advance();
+                }
+                assert!(s.rebuilds < 4 * 4, "lists were reused");
+                positions(&s)
+            })
+        };
+        let one = run(1, false);
+        assert_eq!(one, run(3, false), "1 and 3 threads");
+        assert_eq!(one, run(1, true), "resumed after frame 2");
+    }
+
+    #[test]
+    fn a_frame_too_fast_for_a_skin_does_no_skin_work() {
+        // The bee flies about 1 cm per substep, more than a 5 % skin allows: decided at
+        // the frame's first substep, no substep keeps candidates or copies positions.
+        let mut s = sim("bee", 400);
+        for k in 0..4 {
+            substep(&mut s, k);
+        }
+        assert!(!s.keeps && s.skin == 0.0 && !s.sorted);
+        assert!(s.previous.is_empty() && s.built.is_empty());
+    }
+
+    #[test]
+    fn an_agent_past_half_the_skin_forces_a_rebuild() {
+        let mut s = sim("zonal", 300);
+        substep(&mut s, 0);
+        assert!(s.skin > 0.0, "zonal keeps candidates");
+        substep(&mut s, 1);
+        let rebuilds = s.rebuilds;
+        assert_eq!(rebuilds, 1, "substep 1 reuses the lists");
+        // As if agent 7 had moved just over σ/2 since the rebuild.
+        let away = s.built[7] - s.positions[7];
+        s.built[7] += Vec3::X * s.skin * 0.51 - away;
+        substep(&mut s, 2);
+        assert_eq!(s.rebuilds, rebuilds + 1, "past σ/2: rebuilt");
+        substep(&mut s, 3);
+        // And at the start of every frame.
+        let before = s.rebuilds;
+        substep(&mut s, 0);
+        assert_eq!(s.rebuilds, before + 1);
+    }
 }

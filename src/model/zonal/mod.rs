@@ -107,6 +107,7 @@ fn stimulus(kind: TargetKind) -> Option<Stimulus> {
 
 impl Model for ZonalModel {
     type Agent = Insect;
+    const KEEPS_CANDIDATES: bool = true;
     const INFO: ModelInfo = ModelInfo {
         name: "zonal",
         summary: "Paper 002 (Ren et al. 2016): zonal repulsion, alignment and attraction, \
