@@ -947,7 +947,10 @@ def test_cancel_kills_the_bake_and_keeps_the_previous_cache(beeswarm_bin, tmp_pa
     assert first.returncode == 0, first.stderr
     cache = out / "long.tracks.csv"
     before = cache.read_bytes()
-    p = runner.BakeProcess([beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json"])
+    # A long bake, cancelled after its first progress line: --allow-large, because the
+    # disk check would otherwise refuse it on a machine with under ~33 GB free.
+    p = runner.BakeProcess([beeswarm_bin, "bake", str(shot), "--out", str(out), "--progress", "json",
+                            "--allow-large"])
     ev = p.wait_event(30)
     assert ev and ev[0] == "progress", (ev, p.stderr)
     assert 0.0 <= runner.fraction(ev[1]) < 1.0

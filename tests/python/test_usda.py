@@ -488,7 +488,7 @@ def test_interrupted_bake_keeps_the_previous_cache(beeswarm_bin, tmp_path, clip_
     (tmp_path / "long.toml").write_text(long_shot)
     proc = subprocess.Popen(
         [beeswarm_bin, "bake", str(tmp_path / "long.toml"), "--out", str(out),
-         "--format", "usda,csv", "--progress", "json"],
+         "--format", "usda,csv", "--progress", "json", "--allow-large"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         for line in proc.stdout:
