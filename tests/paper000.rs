@@ -281,8 +281,17 @@ fn fig16_bees_aggregate_in_the_air_without_aligning() {
         pol < 0.3 && agree < 0.3,
         "polarisation {pol}, agreement {agree}"
     );
-    // Kept apart by the repulsion: bodies (2 mm capsules) never overlap.
-    assert!(nearest > 0.004, "closest pair {nearest} m");
+    // Kept apart by the repulsion, which is a soft force: bodies (2 mm radius) graze in a
+    // handful of the shot's ~1.9 million pair-frames at most, never by more than a
+    // quarter of a radius. (Over seeds 16–64 the closest pair ranges from 3.65 to 18 mm,
+    // and the last bits of a build move a seed across 4 mm: "never within 4 mm" held for
+    // a seed, not for the model.)
+    assert!(
+        c.contact_frames <= 5,
+        "{} pair-frames in contact",
+        c.contact_frames
+    );
+    assert!(nearest > 0.0035, "closest pair {nearest} m");
 }
 
 #[test]

@@ -23,6 +23,7 @@ use crate::math::{self, Rng, normalize_or};
 use crate::species::{BEE_CHANNELS, HONEYBEE};
 use glam::{Quat, Vec3};
 use kernels::Kernels;
+use oscillation::Phasor;
 
 /// Time constants of the body's attitude, seconds: how fast the roll reaches its target,
 /// and the smoothing of the mean path for sway. (How fast the heading follows the velocity
@@ -81,9 +82,9 @@ pub struct Bee {
     /// target's index (as f32, so that the state stays plain 4-byte words).
     perch: Vec3,
     perch_target: f32,
-    /// Oscillation phases in the maneuvering functions' own time units.
-    phase_pitch: f32,
-    phase_roll: f32,
+    /// This bee's phase offsets of Eq. 3 and Eq. 4, as phasors (`oscillation::offsets`).
+    phase_pitch: Phasor,
+    phase_roll: Phasor,
 }
 
 impl Agent for Bee {
@@ -142,6 +143,10 @@ pub struct BeeModel {
     phase_spread: f32,
     speed: f32,
     curl: CurlNoise,
+    /// Eq. 3's and Eq. 4's phasors at the time of the substep being stepped, and that
+    /// time, s (set by `prepare`, once per substep for the whole swarm).
+    clock: (Phasor, Phasor),
+    clock_t: f64,
 }
 
 impl Model for BeeModel {
@@ -200,7 +205,14 @@ impl Model for BeeModel {
                 p.noise_cell,
                 p.noise_gain,
             ),
+            clock: oscillation::clock(0.0),
+            clock_t: 0.0,
         }
+    }
+
+    fn prepare(&mut self, cx: &Context) {
+        self.clock = oscillation::clock(cx.t / self.time_unit);
+        self.clock_t = cx.t;
     }
 
     fn reach(&self) -> f32 {
@@ -219,6 +231,7 @@ impl Model for BeeModel {
         let pitch_deg =
             climb_deg + oscillation::pitch_deg(phase_pitch as f64) - oscillation::MEAN_PITCH_DEG;
         let roll_deg = oscillation::roll_deg(phase_roll as f64);
+        let (phase_pitch, phase_roll) = oscillation::offsets(phase_pitch as f64, phase_roll as f64);
         let bee = Bee {
             c,
             wander: rng.gaussian(),
@@ -331,11 +344,16 @@ impl Model for BeeModel {
         // Body oscillation (Eq. 3–4) and vision (Sec. IV-B).
         let air = c.vel - cx.wind;
         let heading = Quat::from_rotation_y(c.yaw);
-        let tt = cx.t / self.time_unit;
+        // (A step outside the world's loop, without `prepare`, works its clock out here.)
+        let (pitch_now, roll_now) = if cx.t == self.clock_t {
+            self.clock
+        } else {
+            oscillation::clock(cx.t / self.time_unit)
+        };
         // Eq. 3's pitch drives the thrust (Eq. 2); the body drawn points along the flight
         // direction, rocking by Eq. 3's oscillation about it (docs/model.md).
-        let wing_pitch = oscillation::pitch_deg(tt + b.phase_pitch as f64);
-        let mut roll_target = oscillation::roll_deg(tt + b.phase_roll as f64);
+        let wing_pitch = oscillation::pitch_deg_of(pitch_now, b.phase_pitch);
+        let mut roll_target = oscillation::roll_deg_of(roll_now, b.phase_roll);
         // The vision axis o is F_o's thrust axis (the heading pitched by Eq. 3), as the
         // calibrated preset was fitted with, not the drawn body's (docs/model.md). Only
         // an obstacle needs it: worked out at the first one (a sine and cosine saved in
