@@ -153,6 +153,20 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// `n` points uniform in the cube [−half, half]³, drawn x, y, z in turn (test clouds).
+#[cfg(test)]
+pub fn random_cloud(rng: &mut Rng, n: usize, half: f32) -> Vec<Vec3> {
+    (0..n)
+        .map(|_| {
+            Vec3::new(
+                rng.range(-half, half),
+                rng.range(-half, half),
+                rng.range(-half, half),
+            )
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -625,16 +625,7 @@ mod tests {
     }
 
     fn cloud(seed: u64, n: usize, half: f32) -> Vec<Vec3> {
-        let mut rng = Rng::new(seed, 1, 1);
-        (0..n)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-half, half),
-                    rng.range(-half, half),
-                    rng.range(-half, half),
-                )
-            })
-            .collect()
+        crate::math::random_cloud(&mut Rng::new(seed, 1, 1), n, half)
     }
 
     #[test]

@@ -240,17 +240,7 @@ mod tests {
     use super::*;
     use crate::math::Rng;
 
-    fn cloud(rng: &mut Rng, n: usize, half: f32) -> Vec<Vec3> {
-        (0..n)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-half, half),
-                    rng.range(-half, half),
-                    rng.range(-half, half),
-                )
-            })
-            .collect()
-    }
+    use crate::math::random_cloud as cloud;
 
     /// The set of agent `i`'s neighbours the grid finds afresh.
     fn fresh(pts: &[Vec3], i: usize, radius: f32) -> (Vec<u32>, bool) {
