@@ -235,8 +235,10 @@ where
                         if cancel.load(Ordering::Relaxed) {
                             return (list, (0.0, 0.0));
                         }
-                        // As `sums`, written out: the closure, used three times, is not
-                        // inlined, and the call costs the bee about 1 % (callgrind).
+                        // As `sums`, written out: called here too, the closure is not
+                        // inlined, and the call costs the bee about 1 % (callgrind; an
+                        // `#[inline(always)]` function for all three paths measured bee
+                        // +39 instructions per step, boids −25).
                         let i = start + k as usize;
                         let me = &agents[i];
                         let ri = me.radius;
