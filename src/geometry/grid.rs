@@ -56,7 +56,10 @@ pub struct Grid {
     dims: IVec3,
     /// `starts[c]..starts[c + 1]` indexes `items` for cell c.
     starts: Vec<u32>,
+    /// Padded past the end by `LANES - 1` entries (u32::MAX), as the position arrays.
     items: Vec<u32>,
+    /// Each point's place in `items` (u32::MAX for points left out).
+    slot: Vec<u32>,
     /// Positions in `items` order, one array per axis, so candidate tests read
     /// contiguous memory.
     xs: Vec<f32>,
@@ -142,7 +145,12 @@ impl Grid {
     /// Every point's index, cell by cell (rows of cells along x, in increasing index order
     /// within a cell): queries run in this order share the rows they read.
     pub fn order(&self) -> &[u32] {
-        &self.items
+        &self.items[..self.len()]
+    }
+
+    /// Number of points in the grid (those not left out).
+    fn len(&self) -> usize {
+        self.items.len().saturating_sub(LANES - 1)
     }
 
     /// The cell edge, m.
@@ -250,12 +258,17 @@ impl Grid {
         for i in 0..total {
             self.starts[i + 1] += self.starts[i];
         }
-        self.items.resize(n, 0);
+        self.items.clear();
+        self.items.resize(n + LANES - 1, u32::MAX);
+        self.slot.clear();
+        self.slot.resize(positions.len(), u32::MAX);
         let mut fill = self.starts[..total].to_vec();
         for (i, &c) in cells.iter().enumerate() {
             if !out(i) {
-                self.items[fill[c as usize] as usize] = i as u32;
-                fill[c as usize] += 1;
+                let f = &mut fill[c as usize];
+                self.items[*f as usize] = i as u32;
+                self.slot[i] = *f;
+                *f += 1;
             }
         }
         self.cells = cells;
@@ -269,7 +282,7 @@ impl Grid {
             .par_iter_mut()
             .zip(self.ys[..n].par_iter_mut())
             .zip(self.zs[..n].par_iter_mut())
-            .zip(self.items.par_iter())
+            .zip(self.items[..n].par_iter())
             .with_min_len(1024)
             .for_each(|(((x, y), z), &i)| {
                 let p = positions[i as usize];
@@ -283,7 +296,7 @@ impl Grid {
     /// order, and the order of the result is a fixed function of `p` and the grid.
     pub fn nearest(&self, p: Vec3, radius: f32, k: usize, skip: usize, out: &mut [u32]) -> usize {
         let k = k.min(MAX_K).min(out.len());
-        if k == 0 || self.items.is_empty() {
+        if k == 0 || self.len() == 0 {
             return 0;
         }
         let mut best = Nearest {
@@ -302,6 +315,7 @@ impl Grid {
             items: &self.items,
             p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
             skip: skip as u32,
+            skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
         };
         if self.cell >= radius {
             // Cells as large as the radius: the 27 around p hold every neighbour, and
@@ -346,7 +360,7 @@ impl Grid {
         skip: usize,
         out: &mut [(u32, f32)],
     ) -> Option<usize> {
-        if self.items.is_empty() {
+        if self.len() == 0 {
             return Some(0);
         }
         let (d, o) = (self.dims, self.origin);
@@ -436,23 +450,44 @@ impl Grid {
         GUESS_MARGIN * r * self.cell
     }
 
+    /// Cells as large as the radius: the 9 rows of 3 cells around p, rows beyond the radius
+    /// skipped. Every candidate within the radius is first collected, without a branch
+    /// that depends on the data (in a sparse cloud fewer than k are found, and a branch per
+    /// hit mispredicts often), and then offered in the order of the scan: the offers a scan
+    /// with the tightening bound makes, since a candidate it would not have tested lies
+    /// beyond the bound at its turn.
     fn walk_cube(&self, p: Vec3, c: IVec3, scan: &Scan, best: &mut Nearest) {
         let (d, o) = (self.dims, self.origin);
         let (x0, x1) = (
             (c.x - self.split).max(0) as usize,
             (c.x + self.split).min(d.x - 1) as usize,
         );
+        let r2 = best.bound;
+        let mut found = Found {
+            slots: [0; COLLECT + LANES],
+            len: 0,
+        };
         for z in (c.z - 1).max(0)..=(c.z + 1).min(d.z - 1) {
             let dz2 = self.slab_d2(p.z, o.z, z);
             for y in (c.y - 1).max(0)..=(c.y + 1).min(d.y - 1) {
-                if dz2 + self.slab_d2(p.y, o.y, y) >= best.bound {
+                if dz2 + self.slab_d2(p.y, o.y, y) >= r2 {
                     continue;
                 }
                 let row = (d.x * (y + d.y * z)) as usize;
                 let s = self.starts[row + x0] as usize;
                 let e = self.starts[row + x1 + 1] as usize;
-                scan.run(s, e, best);
+                scan.collect(s, e, r2, &mut found, best);
             }
+        }
+        let slots = &found.slots[..found.len];
+        if best.len == 0 && slots.len() <= best.k {
+            // Fewer than k: every one, in the scan's order, as offering them would.
+            for (at, &s) in best.at.iter_mut().zip(slots) {
+                *at = scan.items[s as usize];
+            }
+            best.len = slots.len();
+        } else {
+            scan.offer(slots, best);
         }
     }
 
@@ -546,6 +581,35 @@ fn floor_i32(v: f32) -> i32 {
     if (t as f32) > v { t - 1 } else { t }
 }
 
+/// Candidates a sparse query collects before offering them (`Grid::walk_cube`); more are
+/// offered in batches of this many.
+const COLLECT: usize = 64;
+
+/// For each mask of 4 lanes, the lanes set, first to last (the rest 0).
+const PACKED: [[u32; LANES]; 16] = {
+    let mut t = [[0; LANES]; 16];
+    let mut h = 0;
+    while h < 16 {
+        let (mut lane, mut n) = (0, 0);
+        while lane < LANES {
+            if h & (1 << lane) != 0 {
+                t[h][n] = lane as u32;
+                n += 1;
+            }
+            lane += 1;
+        }
+        h += 1;
+    }
+    t
+};
+
+/// Places in the sorted arrays of candidates collected, in the order of the scan.
+struct Found {
+    /// `LANES` spare entries: each group writes four and keeps as many as it found.
+    slots: [u32; COLLECT + LANES],
+    len: usize,
+}
+
 /// A query's view of the sorted arrays.
 struct Scan<'a> {
     xs: &'a [f32],
@@ -554,6 +618,8 @@ struct Scan<'a> {
     items: &'a [u32],
     p: (Vec4, Vec4, Vec4),
     skip: u32,
+    /// `skip`'s place in the sorted arrays (u32::MAX if it has none).
+    skip_slot: u32,
 }
 
 impl Scan<'_> {
@@ -590,6 +656,56 @@ impl Scan<'_> {
                 }
             }
             l += LANES;
+        }
+    }
+
+    /// Collects into `found` the place of every point of the sorted run `a..b` strictly
+    /// within `r2` (squared) other than `skip`, four candidates at a time and without a
+    /// branch per hit; offers (`Scan::offer`) and empties `found` when it is full.
+    #[inline(always)]
+    fn collect(&self, a: usize, b: usize, r2: f32, found: &mut Found, best: &mut Nearest) {
+        let (px, py, pz) = self.p;
+        let end = b + LANES - 1;
+        let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
+        let r2 = Vec4::splat(r2);
+        let mut l = a;
+        while l < b {
+            if found.len > COLLECT - LANES {
+                self.offer(&found.slots[..found.len], best);
+                found.len = 0;
+            }
+            let g = l - a;
+            let dx = Vec4::from_slice(&xs[g..]) - px;
+            let dy = Vec4::from_slice(&ys[g..]) - py;
+            let dz = Vec4::from_slice(&zs[g..]) - pz;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let mut hits = d2.cmplt(r2).bitmask();
+            // Lanes past the run, and the query's own point.
+            hits &= (1 << (b - l).min(LANES)) - 1;
+            let own = self.skip_slot.wrapping_sub(l as u32);
+            hits &= !(((own < LANES as u32) as u32) << (own & 3));
+            let lanes = &PACKED[hits as usize];
+            let out = &mut found.slots[found.len..found.len + LANES];
+            for (o, &lane) in out.iter_mut().zip(lanes) {
+                *o = l as u32 + lane;
+            }
+            found.len += hits.count_ones() as usize;
+            l += LANES;
+        }
+    }
+
+    /// Offers the collected places in order, each if nearer than the bound at its turn
+    /// (its squared distance worked out as `run` does, so the same bits).
+    #[inline(never)]
+    fn offer(&self, slots: &[u32], best: &mut Nearest) {
+        let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
+        for &s in slots {
+            let s = s as usize;
+            let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
+            let d = dx * dx + dy * dy + dz * dz;
+            if d < best.bound {
+                best.offer(self.items[s], d);
+            }
         }
     }
 }
