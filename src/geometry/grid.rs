@@ -314,7 +314,6 @@ impl Grid {
             zs: &self.zs,
             items: &self.items,
             p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
-            skip: skip as u32,
             skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
         };
         if self.cell >= radius {
@@ -463,10 +462,7 @@ impl Grid {
             (c.x + self.split).min(d.x - 1) as usize,
         );
         let r2 = best.bound;
-        let mut found = Found {
-            slots: [0; COLLECT + LANES],
-            len: 0,
-        };
+        let mut found = Found::default();
         for z in (c.z - 1).max(0)..=(c.z + 1).min(d.z - 1) {
             let dz2 = self.slab_d2(p.z, o.z, z);
             for y in (c.y - 1).max(0)..=(c.y + 1).min(d.y - 1) {
@@ -479,23 +475,18 @@ impl Grid {
                 scan.collect(s, e, r2, &mut found, best);
             }
         }
-        let slots = &found.slots[..found.len];
-        if best.len == 0 && slots.len() <= best.k {
-            // Fewer than k: every one, in the scan's order, as offering them would.
-            for (at, &s) in best.at.iter_mut().zip(slots) {
-                *at = scan.items[s as usize];
-            }
-            best.len = slots.len();
-        } else {
-            scan.offer(slots, best);
-        }
+        scan.finish(&found, best);
     }
 
     /// Rows of cells along x, in rings of growing Chebyshev distance from p's row in y and
-    /// z, each trimmed to the chord of the bound's sphere through it; stops once no
-    /// unvisited row can hold a point nearer than the k found (or beyond `radius`).
+    /// z, each trimmed to the chord of the sphere of `radius` through it, out to `radius`;
+    /// every candidate within it collected and then offered as in `walk_cube`. (Offering
+    /// along the way could trim the chords to the tightening bound and stop a ring
+    /// earlier, but a branch per hit costs more than the candidates it saves.)
     fn walk(&self, p: Vec3, c: IVec3, radius: f32, scan: &Scan, best: &mut Nearest) {
         let (d, o) = (self.dims, self.origin);
+        let r2 = radius * radius;
+        let mut found = Found::default();
         // Distance from p to the nearest y or z face of its row: ring q + 1 and beyond lie
         // at least q cells plus this far away.
         let (ly, lz) = (o.y + c.y as f32 * self.cell, o.z + c.z as f32 * self.cell);
@@ -507,19 +498,19 @@ impl Grid {
         for q in 0.. {
             if q > 0 {
                 let gap = (q - 1) as f32 * self.cell + margin;
-                if gap >= radius || gap * gap >= best.bound {
+                if gap >= radius || gap * gap >= r2 {
                     break;
                 }
             }
             // The rows at Chebyshev distance exactly q (clipped to the grid) in a fixed
-            // order; rows whose slab lies beyond the bound are skipped.
+            // order; rows whose slab lies beyond the radius are skipped.
             for z in (c.z - q).max(0)..=(c.z + q).min(d.z - 1) {
                 let dz2 = self.slab_d2(p.z, o.z, z);
-                if dz2 >= best.bound {
+                if dz2 >= r2 {
                     continue;
                 }
-                let row = |y: i32, best: &mut Nearest| {
-                    self.row(p, y, z, dz2, scan, best);
+                let mut row = |y: i32, best: &mut Nearest| {
+                    self.row(p, y, z, dz2, r2, scan, &mut found, best);
                 };
                 if (z - c.z).abs() == q {
                     for y in (c.y - q).max(0)..=(c.y + q).min(d.y - 1) {
@@ -535,23 +526,29 @@ impl Grid {
                     }
                 }
             }
-            if best.len == best.k {
-                let reach = q as f32 * self.cell + margin;
-                if best.bound <= reach * reach {
-                    break;
-                }
-            }
         }
+        scan.finish(&found, best);
     }
 
-    /// Scans row (y, z) over the chord of the bound's sphere through it (`dz2`: the squared
-    /// distance from p to the row's z slab).
+    /// Collects row (y, z) over the chord of the sphere of squared radius `r2` through it
+    /// (`dz2`: the squared distance from p to the row's z slab).
     #[inline(always)]
-    fn row(&self, p: Vec3, y: i32, z: i32, dz2: f32, scan: &Scan, best: &mut Nearest) {
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &self,
+        p: Vec3,
+        y: i32,
+        z: i32,
+        dz2: f32,
+        r2: f32,
+        scan: &Scan,
+        found: &mut Found,
+        best: &mut Nearest,
+    ) {
         let (d, o) = (self.dims, self.origin);
         let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
-        if dyz2 < best.bound {
-            let w = (best.bound - dyz2).sqrt();
+        if dyz2 < r2 {
+            let w = (r2 - dyz2).sqrt();
             // Clamped in floats, where truncation is the floor.
             let last = (d.x - 1) as f32;
             let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
@@ -559,7 +556,7 @@ impl Grid {
             let row = (d.x * (y + d.y * z)) as usize;
             let s = self.starts[row + a] as usize;
             let e = self.starts[row + b + 1] as usize;
-            scan.run(s, e, best);
+            scan.collect(s, e, r2, found, best);
         }
     }
 
@@ -610,6 +607,15 @@ struct Found {
     len: usize,
 }
 
+impl Default for Found {
+    fn default() -> Self {
+        Found {
+            slots: [0; COLLECT + LANES],
+            len: 0,
+        }
+    }
+}
+
 /// A query's view of the sorted arrays.
 struct Scan<'a> {
     xs: &'a [f32],
@@ -617,48 +623,11 @@ struct Scan<'a> {
     zs: &'a [f32],
     items: &'a [u32],
     p: (Vec4, Vec4, Vec4),
-    skip: u32,
-    /// `skip`'s place in the sorted arrays (u32::MAX if it has none).
+    /// The query's own point's place in the sorted arrays (u32::MAX if it has none).
     skip_slot: u32,
 }
 
 impl Scan<'_> {
-    /// Offers every point of the sorted run `a..b` nearer than the current bound. Four
-    /// candidates at a time in SIMD lanes (glam's `Vec4`: SSE2 on x86-64, NEON on ARM,
-    /// scalar elsewhere; the same arithmetic in every lane, so the same results): most
-    /// candidates fail the test, and a failing group costs a handful of instructions.
-    #[inline(always)]
-    fn run(&self, a: usize, b: usize, best: &mut Nearest) {
-        let (px, py, pz) = self.p;
-        // The arrays are padded by LANES - 1 far points, so a group may run past b;
-        // those lanes are masked off.
-        let end = b + LANES - 1;
-        let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
-        let mut l = a;
-        while l < b {
-            let g = l - a;
-            let dx = Vec4::from_slice(&xs[g..]) - px;
-            let dy = Vec4::from_slice(&ys[g..]) - py;
-            let dz = Vec4::from_slice(&zs[g..]) - pz;
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let mut hits = d2.cmplt(Vec4::splat(best.bound)).bitmask();
-            if b - l < LANES {
-                hits &= (1 << (b - l)) - 1;
-            }
-            while hits != 0 {
-                let m = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
-                let d = d2[m];
-                // The bound may have tightened since the group was tested.
-                let j = self.items[l + m];
-                if d < best.bound && j != self.skip {
-                    best.offer(j, d);
-                }
-            }
-            l += LANES;
-        }
-    }
-
     /// Collects into `found` the place of every point of the sorted run `a..b` strictly
     /// within `r2` (squared) other than `skip`, four candidates at a time and without a
     /// branch per hit; offers (`Scan::offer`) and empties `found` when it is full.
@@ -691,6 +660,21 @@ impl Scan<'_> {
             }
             found.len += hits.count_ones() as usize;
             l += LANES;
+        }
+    }
+
+    /// Offers what is left in `found`: with fewer than k found in all, every one in the
+    /// scan's order, as offering them would.
+    #[inline(always)]
+    fn finish(&self, found: &Found, best: &mut Nearest) {
+        let slots = &found.slots[..found.len];
+        if best.len == 0 && slots.len() <= best.k {
+            for (at, &s) in best.at.iter_mut().zip(slots) {
+                *at = self.items[s as usize];
+            }
+            best.len = slots.len();
+        } else {
+            self.offer(slots, best);
         }
     }
 
