@@ -9,15 +9,18 @@
 //! sparse cloud a query scans the 9 rows of 3 cells around it. In a crowd the cells are
 //! smaller and 4 times thinner along x, and a query walks rows of cells along x in rings of
 //! growing distance in y and z, each row trimmed to the chord the search sphere cuts
-//! through it, and stops once no unvisited row can hold anything nearer than the `k` found;
-//! the walk first goes out only to a guess of the k-th neighbour's distance from the local
-//! density. A step then costs about the same per agent in a crowd of 100,000 per m³ as in a
-//! sparse cloud.
+//! through it, out to a guess of the k-th neighbour's distance from the local density
+//! (further only if fewer than k lie within it). A step then costs about the same per
+//! agent in a crowd of 100,000 per m³ as in a sparse cloud.
 //!
-//! Agent indices are counting-sorted by cell in increasing index order and the ring walk
-//! is a fixed function of the query point and the grid, so the neighbours found — and the
-//! order every floating-point sum visits them in — are the same whatever the number of
-//! threads.
+//! A query first collects every candidate within its reach, four at a time and without a
+//! branch per candidate (which neighbours fall within reach is data a branch predictor
+//! cannot guess, and its misses cost more than the arithmetic), and then keeps the k
+//! nearest, in the order they were collected.
+//!
+//! Agent indices are counting-sorted by cell in increasing index order and the walk is a
+//! fixed function of the query point and the grid, so the neighbours found — and the order
+//! every floating-point sum visits them in — are the same whatever the number of threads.
 
 use glam::{IVec3, Vec3, Vec4};
 
@@ -68,63 +71,8 @@ pub struct Grid {
     cells: Vec<u32>,
 }
 
-/// Up to `k` nearest candidates found so far: point indices and their squared distances,
-/// and the worst of them once full.
-struct Nearest<'a> {
-    at: &'a mut [u32],
-    d2: [f32; MAX_K],
-    len: usize,
-    k: usize,
-    /// Squared distance a candidate must beat: the radius until `k` are found, then the
-    /// farthest of them.
-    bound: f32,
-    worst: usize,
-}
-
-/// The largest `k` a query takes (a multiple of the lanes).
+/// The largest `k` a query takes.
 pub const MAX_K: usize = 32;
-
-impl Nearest<'_> {
-    #[inline(always)]
-    fn offer(&mut self, t: u32, d2: f32) {
-        if self.len < self.k {
-            self.at[self.len] = t;
-            self.d2[self.len] = d2;
-            self.len += 1;
-            if self.len == self.k {
-                self.find_worst();
-            }
-        } else {
-            self.at[self.worst] = t;
-            self.d2[self.worst] = d2;
-            self.find_worst();
-        }
-    }
-
-    /// The farthest entry (ties to the later one, so the order of arrival decides, as
-    /// everywhere), four at a time: in a crowd most offers replace the worst.
-    fn find_worst(&mut self) {
-        let group = |g: usize| {
-            let four: [f32; LANES] = self.d2[g * LANES..(g + 1) * LANES].try_into().unwrap();
-            Vec4::from(four)
-        };
-        let groups = self.len.div_ceil(LANES);
-        // Entries past `len` hold -1, never the farthest.
-        let far = (0..groups)
-            .fold(Vec4::splat(-1.0), |m, g| m.max(group(g)))
-            .max_element();
-        let mut w = 0;
-        for g in (0..groups).rev() {
-            let hits = group(g).cmpeq(Vec4::splat(far)).bitmask();
-            if hits != 0 {
-                w = g * LANES + (31 - hits.leading_zeros()) as usize;
-                break;
-            }
-        }
-        self.worst = w;
-        self.bound = self.d2[w];
-    }
-}
 
 impl Grid {
     /// Cell coordinates of `p`, clamped into the grid (points outside the bounding box of
@@ -292,58 +240,50 @@ impl Grid {
 
     /// Writes into `out` the indices of the (at most) `k` points nearest `p` strictly
     /// within `radius` (radius ≤ the one the grid was built for), leaving out index
-    /// `skip`; returns how many. Ties at the k-th distance are broken by the fixed walk
-    /// order, and the order of the result is a fixed function of `p` and the grid.
+    /// `skip`; returns how many. They are listed in the order of the walk, and ties at the
+    /// k-th distance go to the first walked: a fixed function of `p` and the grid.
     pub fn nearest(&self, p: Vec3, radius: f32, k: usize, skip: usize, out: &mut [u32]) -> usize {
         let k = k.min(MAX_K).min(out.len());
         if k == 0 || self.len() == 0 {
             return 0;
         }
-        let mut best = Nearest {
-            at: out,
-            d2: [-1.0; MAX_K],
-            len: 0,
-            k,
-            bound: radius * radius,
-            worst: 0,
-        };
         let c = self.cell_of(p);
         let scan = Scan {
             xs: &self.xs,
             ys: &self.ys,
             zs: &self.zs,
-            items: &self.items,
             p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
             skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
+            k,
         };
+        let mut found = Found::default();
         if self.cell >= radius {
-            // Cells as large as the radius: the 27 around p hold every neighbour, and
-            // stopping early would need k inside p's own cell, which the cell choice
-            // makes rare. One pass over 9 rows of 3 cells, rows beyond the bound skipped.
-            self.walk_cube(p, c, &scan, &mut best);
+            // Cells as large as the radius: the 27 around p hold every neighbour. One pass
+            // over 9 rows of 3 cells, rows beyond the radius skipped.
+            self.walk_cube(p, c, radius * radius, &scan, &mut found);
         } else {
             // A crowd: first a walk out to a guess of the k-th neighbour's distance from
-            // the local density, which bounds the rows walked and the candidates offered
-            // from the start. Finding k within the guess proves them the k nearest;
-            // otherwise the walk is redone a little further, then to the radius.
-            // The guess is a fixed function of the grid and p's cell, so the answer and
-            // its order stay a fixed function of p and the grid.
+            // the local density, which bounds the rows walked and the candidates collected.
+            // Finding k within the guess proves the k nearest among them; otherwise the
+            // walk is redone a little further, then to the radius. The guess is a fixed
+            // function of the grid and p's cell, so the answer and its order stay a fixed
+            // function of p and the grid.
             let guess = self.kth_distance_guess(c, k);
-            for reach in [guess, guess * RETRY_MARGIN] {
-                if reach >= radius {
+            let mut reaches = [guess, guess * RETRY_MARGIN, radius].into_iter();
+            loop {
+                let reach = reaches.next().unwrap_or(radius).min(radius);
+                found.len = 0;
+                self.walk(p, c, reach, &scan, &mut found);
+                if found.len >= k || reach >= radius {
                     break;
                 }
-                best.bound = reach * reach;
-                self.walk(p, c, reach, &scan, &mut best);
-                if best.len == best.k {
-                    return best.len;
-                }
-                best.len = 0;
             }
-            best.bound = radius * radius;
-            self.walk(p, c, radius, &scan, &mut best);
         }
-        best.len
+        scan.keep_nearest(&mut found);
+        for (o, &s) in out.iter_mut().zip(&found.slots[..found.len]) {
+            *o = self.items[s as usize];
+        }
+        found.len
     }
 
     /// Writes into `out` every point strictly within `radius` of `p` (any radius, unlike
@@ -449,20 +389,14 @@ impl Grid {
         GUESS_MARGIN * r * self.cell
     }
 
-    /// Cells as large as the radius: the 9 rows of 3 cells around p, rows beyond the radius
-    /// skipped. Every candidate within the radius is first collected, without a branch
-    /// that depends on the data (in a sparse cloud fewer than k are found, and a branch per
-    /// hit mispredicts often), and then offered in the order of the scan: the offers a scan
-    /// with the tightening bound makes, since a candidate it would not have tested lies
-    /// beyond the bound at its turn.
-    fn walk_cube(&self, p: Vec3, c: IVec3, scan: &Scan, best: &mut Nearest) {
+    /// Cells as large as the radius: collects the 9 rows of 3 cells around p, rows beyond
+    /// the radius (squared: `r2`) skipped.
+    fn walk_cube(&self, p: Vec3, c: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
         let (d, o) = (self.dims, self.origin);
         let (x0, x1) = (
             (c.x - self.split).max(0) as usize,
             (c.x + self.split).min(d.x - 1) as usize,
         );
-        let r2 = best.bound;
-        let mut found = Found::default();
         for z in (c.z - 1).max(0)..=(c.z + 1).min(d.z - 1) {
             let dz2 = self.slab_d2(p.z, o.z, z);
             for y in (c.y - 1).max(0)..=(c.y + 1).min(d.y - 1) {
@@ -472,21 +406,17 @@ impl Grid {
                 let row = (d.x * (y + d.y * z)) as usize;
                 let s = self.starts[row + x0] as usize;
                 let e = self.starts[row + x1 + 1] as usize;
-                scan.collect(s, e, r2, &mut found, best);
+                scan.collect(s, e, r2, found);
             }
         }
-        scan.finish(&found, best);
     }
 
-    /// Rows of cells along x, in rings of growing Chebyshev distance from p's row in y and
-    /// z, each trimmed to the chord of the sphere of `radius` through it, out to `radius`;
-    /// every candidate within it collected and then offered as in `walk_cube`. (Offering
-    /// along the way could trim the chords to the tightening bound and stop a ring
-    /// earlier, but a branch per hit costs more than the candidates it saves.)
-    fn walk(&self, p: Vec3, c: IVec3, radius: f32, scan: &Scan, best: &mut Nearest) {
+    /// Collects rows of cells along x, in rings of growing Chebyshev distance from p's row
+    /// in y and z, each trimmed to the chord of the sphere of `radius` through it, out to
+    /// `radius`.
+    fn walk(&self, p: Vec3, c: IVec3, radius: f32, scan: &Scan, found: &mut Found) {
         let (d, o) = (self.dims, self.origin);
         let r2 = radius * radius;
-        let mut found = Found::default();
         // Distance from p to the nearest y or z face of its row: ring q + 1 and beyond lie
         // at least q cells plus this far away.
         let (ly, lz) = (o.y + c.y as f32 * self.cell, o.z + c.z as f32 * self.cell);
@@ -509,42 +439,29 @@ impl Grid {
                 if dz2 >= r2 {
                     continue;
                 }
-                let mut row = |y: i32, best: &mut Nearest| {
-                    self.row(p, y, z, dz2, r2, scan, &mut found, best);
-                };
+                let mut row = |y: i32| self.row(p, y, z, dz2, r2, scan, found);
                 if (z - c.z).abs() == q {
                     for y in (c.y - q).max(0)..=(c.y + q).min(d.y - 1) {
-                        row(y, best);
+                        row(y);
                     }
                 } else {
                     // Off the z faces only the ring's two y ends belong to it.
                     if c.y - q >= 0 {
-                        row(c.y - q, best);
+                        row(c.y - q);
                     }
                     if c.y + q < d.y {
-                        row(c.y + q, best);
+                        row(c.y + q);
                     }
                 }
             }
         }
-        scan.finish(&found, best);
     }
 
     /// Collects row (y, z) over the chord of the sphere of squared radius `r2` through it
     /// (`dz2`: the squared distance from p to the row's z slab).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn row(
-        &self,
-        p: Vec3,
-        y: i32,
-        z: i32,
-        dz2: f32,
-        r2: f32,
-        scan: &Scan,
-        found: &mut Found,
-        best: &mut Nearest,
-    ) {
+    fn row(&self, p: Vec3, y: i32, z: i32, dz2: f32, r2: f32, scan: &Scan, found: &mut Found) {
         let (d, o) = (self.dims, self.origin);
         let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
         if dyz2 < r2 {
@@ -556,7 +473,7 @@ impl Grid {
             let row = (d.x * (y + d.y * z)) as usize;
             let s = self.starts[row + a] as usize;
             let e = self.starts[row + b + 1] as usize;
-            scan.collect(s, e, r2, found, best);
+            scan.collect(s, e, r2, found);
         }
     }
 
@@ -578,8 +495,7 @@ fn floor_i32(v: f32) -> i32 {
     if (t as f32) > v { t - 1 } else { t }
 }
 
-/// Candidates a sparse query collects before offering them (`Grid::walk_cube`); more are
-/// offered in batches of this many.
+/// Candidates a query holds: with more, it keeps the k nearest so far and goes on.
 const COLLECT: usize = 64;
 
 /// For each mask of 4 lanes, the lanes set, first to last (the rest 0).
@@ -621,18 +537,19 @@ struct Scan<'a> {
     xs: &'a [f32],
     ys: &'a [f32],
     zs: &'a [f32],
-    items: &'a [u32],
     p: (Vec4, Vec4, Vec4),
     /// The query's own point's place in the sorted arrays (u32::MAX if it has none).
     skip_slot: u32,
+    /// Neighbours wanted (at most `MAX_K`).
+    k: usize,
 }
 
 impl Scan<'_> {
     /// Collects into `found` the place of every point of the sorted run `a..b` strictly
-    /// within `r2` (squared) other than `skip`, four candidates at a time and without a
-    /// branch per hit; offers (`Scan::offer`) and empties `found` when it is full.
+    /// within `r2` (squared) other than the query's own, four candidates at a time and
+    /// without a branch per hit; when `found` is full it keeps the k nearest and goes on.
     #[inline(always)]
-    fn collect(&self, a: usize, b: usize, r2: f32, found: &mut Found, best: &mut Nearest) {
+    fn collect(&self, a: usize, b: usize, r2: f32, found: &mut Found) {
         let (px, py, pz) = self.p;
         let end = b + LANES - 1;
         let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
@@ -640,8 +557,7 @@ impl Scan<'_> {
         let mut l = a;
         while l < b {
             if found.len > COLLECT - LANES {
-                self.offer(&found.slots[..found.len], best);
-                found.len = 0;
+                self.keep_nearest(found);
             }
             let g = l - a;
             let dx = Vec4::from_slice(&xs[g..]) - px;
@@ -663,34 +579,37 @@ impl Scan<'_> {
         }
     }
 
-    /// Offers what is left in `found`: with fewer than k found in all, every one in the
-    /// scan's order, as offering them would.
-    #[inline(always)]
-    fn finish(&self, found: &Found, best: &mut Nearest) {
-        let slots = &found.slots[..found.len];
-        if best.len == 0 && slots.len() <= best.k {
-            for (at, &s) in best.at.iter_mut().zip(slots) {
-                *at = self.items[s as usize];
-            }
-            best.len = slots.len();
-        } else {
-            self.offer(slots, best);
-        }
-    }
-
-    /// Offers the collected places in order, each if nearer than the bound at its turn
-    /// (its squared distance worked out as `run` does, so the same bits).
+    /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
+    /// k-th distance going to the first. Their squared distances are worked out again as
+    /// `collect` does (so the same bits), the k-th picked by selection, and the rest
+    /// dropped in one pass without a branch per candidate.
     #[inline(never)]
-    fn offer(&self, slots: &[u32], best: &mut Nearest) {
+    fn keep_nearest(&self, found: &mut Found) {
+        let (n, k) = (found.len, self.k);
+        if n <= k {
+            return;
+        }
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
-        for &s in slots {
+        let mut d2 = [0.0f32; COLLECT + LANES];
+        for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
             let s = s as usize;
             let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
-            let d = dx * dx + dy * dy + dz * dz;
-            if d < best.bound {
-                best.offer(self.items[s], d);
-            }
+            *d = dx * dx + dy * dy + dz * dz;
         }
+        let mut sorted = d2;
+        let (_, &mut kth, _) = sorted[..n].select_nth_unstable_by(k - 1, f32::total_cmp);
+        let mut ties = k - d2[..n].iter().filter(|&&d| d < kth).count();
+        let mut w = 0;
+        // In place: the write position never passes the read position.
+        for (r, &d) in d2[..n].iter().enumerate() {
+            let s = found.slots[r];
+            let tie = (d == kth) & (ties > 0);
+            let keep = (d < kth) | tie;
+            found.slots[w] = s;
+            w += keep as usize;
+            ties -= tie as usize;
+        }
+        found.len = w;
     }
 }
 
