@@ -406,17 +406,20 @@ impl Grid {
         for (y, slab) in ys.clone().zip(&mut dy2) {
             *slab = self.slab_d2(p.y, o.y, y);
         }
+        // The rows within the radius first, kept without a branch (which rows those are
+        // depends on where p lies in its cell), then scanned.
+        let mut runs = [(0u32, 0u32); 9];
+        let mut n = 0;
         for z in zs {
             let dz2 = self.slab_d2(p.z, o.z, z);
             for (y, &dy2) in ys.clone().zip(&dy2) {
-                if dz2 + dy2 >= r2 {
-                    continue;
-                }
                 let row = (d.x * (y + d.y * z)) as usize;
-                let s = self.starts[row + x0] as usize;
-                let e = self.starts[row + x1 + 1] as usize;
-                scan.collect(s, e, r2, found);
+                runs[n] = (self.starts[row + x0], self.starts[row + x1 + 1]);
+                n += (dz2 + dy2 < r2) as usize;
             }
+        }
+        for &(s, e) in &runs[..n] {
+            scan.collect(s as usize, e as usize, r2, found);
         }
     }
 
