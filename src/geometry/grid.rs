@@ -389,8 +389,23 @@ impl Grid {
         GUESS_MARGIN * r * self.cell
     }
 
+    /// The cube of `kth_distance_guess`'s distance for `count` points in `cells` whole
+    /// cells (infinite without points).
+    fn kth_distance_cubed(&self, k: usize, count: u32, cells: f32) -> f32 {
+        if count == 0 {
+            return f32::INFINITY;
+        }
+        let r3 = 3.0 * k as f32 * cells / (4.0 * std::f32::consts::PI * count as f32);
+        let margin3 = GUESS_MARGIN * GUESS_MARGIN * GUESS_MARGIN;
+        margin3 * r3 * (self.cell * self.cell * self.cell)
+    }
+
     /// Cells as large as the radius: collects the 9 rows of 3 cells around p, rows beyond
-    /// the radius (squared: `r2`) skipped.
+    /// the radius (squared: `r2`) skipped. Where the 27 cells hold more points than k
+    /// within the radius at their density (the core of a nest, in a swarm sparse
+    /// elsewhere), it first collects only out to a guess of the k-th neighbour's distance,
+    /// as a crowd's walk does: finding k there proves the k nearest are among them, and
+    /// the query keeps fewer candidates; otherwise it collects out to the radius.
     fn walk_cube(&self, p: Vec3, c: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
         let (d, o) = (self.dims, self.origin);
         let (x0, x1) = (
@@ -406,21 +421,33 @@ impl Grid {
         for (y, slab) in ys.clone().zip(&mut dy2) {
             *slab = self.slab_d2(p.y, o.y, y);
         }
-        // The rows within the radius first, kept without a branch (which rows those are
-        // depends on where p lies in its cell), then scanned.
-        let mut runs = [(0u32, 0u32); 9];
-        let mut n = 0;
-        for z in zs {
+        // Every row with its slab's squared distance; which of them lie within reach is
+        // picked below without a branch (it depends on where p lies in its cell).
+        let mut rows = [(0u32, 0u32, 0.0f32); 9];
+        let (mut m, mut count) = (0, 0);
+        for z in zs.clone() {
             let dz2 = self.slab_d2(p.z, o.z, z);
             for (y, &dy2) in ys.clone().zip(&dy2) {
                 let row = (d.x * (y + d.y * z)) as usize;
-                runs[n] = (self.starts[row + x0], self.starts[row + x1 + 1]);
-                n += (dz2 + dy2 < r2) as usize;
+                let (s, e) = (self.starts[row + x0], self.starts[row + x1 + 1]);
+                rows[m] = (s, e, dz2 + dy2);
+                m += 1;
+                count += e - s;
             }
         }
-        for &(s, e) in &runs[..n] {
-            scan.collect(s as usize, e as usize, r2, found);
+        let cells = ((x1 - x0 + 1) * ys.count() * zs.count()) as f32 / self.split as f32;
+        // Compared cubed first: the cube root is a library call, and a sparse query (the
+        // common case) does not need it.
+        let cubed = self.kth_distance_cubed(scan.k, count, cells);
+        if cubed < r2 * r2.sqrt() {
+            let guess = cubed.cbrt();
+            scan.collect_rows(&rows[..m], guess * guess, found);
+            if found.len >= scan.k {
+                return;
+            }
+            found.len = 0;
         }
+        scan.collect_rows(&rows[..m], r2, found);
     }
 
     /// Collects rows of cells along x, in rings of growing Chebyshev distance from p's row
@@ -513,6 +540,9 @@ fn floor_i32(v: f32) -> i32 {
 /// Candidates a query holds: with more, it keeps the k nearest so far and goes on.
 const COLLECT: usize = 64;
 
+/// Up to this many candidates too many are dropped one at a time (`Scan::keep_nearest`).
+const DROP_ONE_BY_ONE: usize = 12;
+
 /// For each mask of 4 lanes, the lanes set, first to last (the rest 0).
 const PACKED: [[u32; LANES]; 16] = {
     let mut t = [[0; LANES]; 16];
@@ -594,10 +624,26 @@ impl Scan<'_> {
         }
     }
 
+    /// Collects the rows `(start, end, slab distance²)` whose slab lies within `r2`.
+    #[inline(always)]
+    fn collect_rows(&self, rows: &[(u32, u32, f32)], r2: f32, found: &mut Found) {
+        let mut runs = [(0u32, 0u32); 9];
+        let mut n = 0;
+        for &(s, e, slab) in rows {
+            runs[n] = (s, e);
+            n += (slab < r2) as usize;
+        }
+        for &(s, e) in &runs[..n] {
+            self.collect(s as usize, e as usize, r2, found);
+        }
+    }
+
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
     /// k-th distance going to the first. Their squared distances are worked out again as
-    /// `collect` does (so the same bits), the k-th picked by selection, and the rest
-    /// dropped in one pass without a branch per candidate.
+    /// `collect` does (so the same bits). A few too many (the usual case): the farthest,
+    /// the last of equals, dropped one at a time, four lanes at a time and without a
+    /// branch on the values (a sort's comparisons mispredict); many: the k-th distance by
+    /// selection. Either way one pass then keeps the rest in order.
     #[inline(never)]
     fn keep_nearest(&self, found: &mut Found) {
         let (n, k) = (found.len, self.k);
@@ -605,24 +651,41 @@ impl Scan<'_> {
             return;
         }
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
-        let mut d2 = [0.0f32; COLLECT + LANES];
+        // −1: no candidate, never the farthest.
+        let mut d2 = [-1.0f32; COLLECT + LANES];
         for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
             let s = s as usize;
             let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
             *d = dx * dx + dy * dy + dz * dz;
         }
-        let mut sorted = d2;
-        let (_, &mut kth, _) = sorted[..n].select_nth_unstable_by(k - 1, f32::total_cmp);
-        let mut ties = k - d2[..n].iter().filter(|&&d| d < kth).count();
         let mut w = 0;
-        // In place: the write position never passes the read position.
-        for (r, &d) in d2[..n].iter().enumerate() {
-            let s = found.slots[r];
-            let tie = (d == kth) & (ties > 0);
-            let keep = (d < kth) | tie;
-            found.slots[w] = s;
-            w += keep as usize;
-            ties -= tie as usize;
+        if n - k <= DROP_ONE_BY_ONE {
+            let groups = n.div_ceil(LANES);
+            for _ in k..n {
+                let group = |g: usize| Vec4::from_slice(&d2[g * LANES..]);
+                let far = (0..groups)
+                    .fold(Vec4::splat(-1.0), |m, g| m.max(group(g)))
+                    .max_element();
+                let at = (0..groups).fold(0u64, |m, g| {
+                    m | (group(g).cmpeq(Vec4::splat(far)).bitmask() as u64) << (g * LANES)
+                });
+                d2[(63 - at.leading_zeros()) as usize] = -1.0;
+            }
+            // In place: the write position never passes the read position.
+            for (r, &d) in d2[..n].iter().enumerate() {
+                found.slots[w] = found.slots[r];
+                w += (d >= 0.0) as usize;
+            }
+        } else {
+            let mut sorted = d2;
+            let (_, &mut kth, _) = sorted[..n].select_nth_unstable_by(k - 1, f32::total_cmp);
+            let mut ties = k - d2[..n].iter().filter(|&&d| d < kth).count();
+            for (r, &d) in d2[..n].iter().enumerate() {
+                let tie = (d == kth) & (ties > 0);
+                found.slots[w] = found.slots[r];
+                w += ((d < kth) | tie) as usize;
+                ties -= tie as usize;
+            }
         }
         found.len = w;
     }
@@ -706,6 +769,20 @@ mod tests {
         g.build(&pts, 0.15);
         assert!(g.cell() < 0.15 * 0.3, "cell {} m", g.cell());
         check(&pts, 0.15, 16);
+    }
+
+    #[test]
+    fn a_sparse_grid_with_more_than_k_around_a_query_keeps_the_answer() {
+        // About 10 points per radius-sized cell: not a crowd, so the cells stay as large as
+        // the radius, but some 40 lie within it, so queries first look within a guess of
+        // the 16th-nearest distance (and the rest of the cloud, sparser, does not).
+        let mut pts = cloud(7, 1250, 0.5);
+        pts.extend(cloud(8, 300, 2.0));
+        let mut g = Grid::default();
+        g.build(&pts, 0.2);
+        assert!(g.cell() >= 0.2, "not a crowd: cell {} m", g.cell());
+        check(&pts, 0.2, 16);
+        check(&pts, 0.2, 5);
     }
 
     #[test]
