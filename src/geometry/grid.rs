@@ -440,8 +440,9 @@ impl Grid {
         // common case) does not need it.
         let cubed = self.kth_distance_cubed(scan.k, count, cells);
         if cubed < r2 * r2.sqrt() {
+            // (Never past the radius, whatever the cube root's rounding.)
             let guess = cubed.cbrt();
-            scan.collect_rows(&rows[..m], guess * guess, found);
+            scan.collect_rows(&rows[..m], (guess * guess).min(r2), found);
             if found.len >= scan.k {
                 return;
             }
