@@ -5,6 +5,7 @@
 //! a velocity has no direction).
 
 use super::database::{LANES, Soa, turn};
+use super::neighbours::CellIndex;
 use crate::math::normalize_or;
 use crate::model::context::MAX_NEIGHBOURS;
 use glam::{Mat3, Vec3};
@@ -67,8 +68,9 @@ pub struct Attraction {
     s_i: f32,
     /// xx, yy, zz, xy, xz, yz.
     m: [f32; 6],
-    /// Neighbours added but not yet summed: positions by component, and how many.
-    pending: [[f32; ATT_LANES]; 3],
+    /// Neighbours added but not yet summed: positions by component, and how many (fewer
+    /// than [`ATT_LANES`] between calls; room for a whole batch more).
+    pending: [[f32; 2 * ATT_LANES]; 3],
     n_pending: usize,
 }
 
@@ -88,7 +90,7 @@ impl Attraction {
             g: Vec3::ZERO,
             s_i: 0.0,
             m: [0.0; 6],
-            pending: [[0.0; ATT_LANES]; 3],
+            pending: [[0.0; 2 * ATT_LANES]; 3],
             n_pending: 0,
         }
     }
@@ -96,19 +98,84 @@ impl Attraction {
     /// Adds the neighbour at `q`.
     #[inline]
     pub fn add(&mut self, q: Vec3) {
-        let k = self.n_pending;
-        self.pending[0][k] = q.x;
-        self.pending[1][k] = q.y;
-        self.pending[2][k] = q.z;
-        self.n_pending += 1;
-        self.n += 1;
-        if self.n_pending == ATT_LANES {
+        self.add_lanes(&[q.x; ATT_LANES], &[q.y; ATT_LANES], &[q.z; ATT_LANES], 1);
+    }
+
+    /// Adds the neighbours at (x[l], y[l], z[l]) for every bit l of `mask`, in lane order:
+    /// every lane is written to the buffer and the count advanced by its bit, so there is
+    /// no branch per neighbour (whether a scanned agent is one is unpredictable).
+    #[inline(always)]
+    pub fn add_lanes(
+        &mut self,
+        x: &[f32; ATT_LANES],
+        y: &[f32; ATT_LANES],
+        z: &[f32; ATT_LANES],
+        mask: u32,
+    ) {
+        let mut k = self.n_pending;
+        for l in 0..ATT_LANES {
+            // k < ATT_LANES + l here, so the mask changes nothing (it spares a bounds check).
+            let slot = k & (2 * ATT_LANES - 1);
+            self.pending[0][slot] = x[l];
+            self.pending[1][slot] = y[l];
+            self.pending[2][slot] = z[l];
+            k += ((mask >> l) & 1) as usize;
+        }
+        self.n += k - self.n_pending;
+        self.n_pending = k;
+        if k >= ATT_LANES {
             self.sum_pending();
         }
     }
 
-    /// Sums the buffered neighbours into F, g, Σ f k/d and the matrix.
+    /// Adds the neighbours in the attraction zone, r1 ≤ d < r2, of `cells` (the agent
+    /// `exclude`, itself, left out), at most `limit` in all: the first found, in
+    /// [`CellIndex::for_each_in_shell`]'s order.
     #[inline]
+    pub fn gather(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
+        }
+        self.gather_batches(cells, exclude, r1, r2, limit);
+    }
+
+    /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
+    /// one instruction instead of two, the same operations, so the same bits (no fused
+    /// multiply-add, as in selection.rs).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
+        self.gather_batches(cells, exclude, r1, r2, limit);
+    }
+
+    #[inline(always)]
+    fn gather_batches(
+        &mut self,
+        cells: &CellIndex,
+        exclude: usize,
+        r1: f32,
+        r2: f32,
+        limit: usize,
+    ) {
+        let p = self.p;
+        cells.for_each_batch_in_shell(p, r1, r2, |b, mut hits| {
+            for (l, &j) in b.index.iter().enumerate() {
+                hits &= !(u32::from(j as usize == exclude) << l);
+            }
+            // Past the limit, only the first hits (rare: a crowd of more than `limit`).
+            let room = limit.saturating_sub(self.n);
+            while hits.count_ones() as usize > room {
+                hits &= !(1 << (31 - hits.leading_zeros()));
+            }
+            self.add_lanes(b.x, b.y, b.z, hits);
+        });
+    }
+
+    /// Sums the first [`ATT_LANES`] buffered neighbours (all, when fewer) into F, g,
+    /// Σ f k/d and the matrix, and moves the rest to the front.
+    #[inline(always)]
     fn sum_pending(&mut self) {
         let [qx, qy, qz] = self.pending;
         let (p, k) = (self.p, self.k);
@@ -135,7 +202,8 @@ impl Attraction {
             t[9][l] = c * ux * uz;
             t[10][l] = c * uy * uz;
         }
-        for l in 0..self.n_pending {
+        let count = self.n_pending.min(ATT_LANES);
+        for l in 0..count {
             self.f += t[0][l];
             self.g += Vec3::new(t[1][l], t[2][l], t[3][l]);
             self.s_i += t[4][l];
@@ -143,7 +211,10 @@ impl Attraction {
                 *m += t[l];
             }
         }
-        self.n_pending = 0;
+        for q in &mut self.pending {
+            q.copy_within(ATT_LANES.., 0);
+        }
+        self.n_pending -= count;
     }
 }
 
@@ -522,6 +593,55 @@ mod tests {
         );
         assert_eq!(a.s_i.to_bits(), s_i.to_bits());
         assert_eq!(a.m.map(f32::to_bits), m.map(f32::to_bits));
+    }
+
+    #[test]
+    fn gathering_by_batches_is_adding_one_at_a_time() {
+        // The zone's neighbours taken a batch at a time without a branch per hit (and, on
+        // CPUs with AVX2, summed eight to an instruction) against each added as the scan
+        // finds it: the same neighbours, the same count and the same sums bit for bit,
+        // also when the limit cuts a batch.
+        let (rho, d1, d2) = (2.5f32, 0.08f32, 0.3f32);
+        let mut rng = crate::math::Rng::new(13, 0, 0);
+        let pts: Vec<Vec3> = (0..400)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-0.4, 0.4),
+                    rng.range(-0.3, 0.3),
+                    rng.range(-0.4, 0.4),
+                )
+            })
+            .collect();
+        let mut cells = CellIndex::default();
+        cells.build(&pts, d2);
+        let bits = |a: &Attraction| {
+            let mut a = *a;
+            a.sum_pending();
+            let g = a.g.to_array().map(f32::to_bits);
+            (
+                a.n,
+                a.f.to_bits(),
+                g,
+                a.s_i.to_bits(),
+                a.m.map(f32::to_bits),
+            )
+        };
+        let mut cut = 0;
+        for (i, &p) in pts.iter().enumerate().take(60) {
+            for limit in [512, 13] {
+                let mut one = Attraction::new(rho, d1, p);
+                cells.for_each_in_shell(p, d1, d2, |j, q| {
+                    if j != i && one.n < limit {
+                        one.add(q);
+                    }
+                });
+                let mut batched = Attraction::new(rho, d1, p);
+                batched.gather(&cells, i, d1, d2, limit);
+                cut += usize::from(limit == 13 && one.n == 13);
+                assert_eq!(bits(&one), bits(&batched), "agent {i}, limit {limit}");
+            }
+        }
+        assert!(cut > 40, "{cut}");
     }
 
     #[test]

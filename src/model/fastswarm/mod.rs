@@ -220,11 +220,7 @@ impl Model for FastswarmModel {
         // more, the first MAX_ATTRACTION found (the sum is an average).
         let mut att = Attraction::new(self.rho, d_att1, pos);
         if w_oa > 0.0 {
-            self.cells.for_each_in_shell(pos, d_att1, d_att2, |j, q| {
-                if j != i && att.n < MAX_ATTRACTION {
-                    att.add(q);
-                }
-            });
+            att.gather(&self.cells, i, d_att1, d_att2, MAX_ATTRACTION);
         }
         e.attraction_sums(w_oa, &att);
         if let Some(c) = self.center {
