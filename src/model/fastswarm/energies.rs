@@ -439,8 +439,9 @@ pub struct Frame {
 impl Frame {
     /// E of Eq. 2 for the `count` (≤ [`LANES`]) samples of `d` from `start`, evaluated
     /// [`LANES`] at a time; lanes past `count` are +∞. When no lane is below `best` before
-    /// the acceleration term (the costliest, and positive: e^x > 0, |·| ≥ 0, so adding it
-    /// never lowers a sum) every lane is returned as +∞ without it: none could have won.
+    /// the acceleration term (positive: e^x > 0, |·| ≥ 0, so adding it never lowers a sum),
+    /// or, with repulsion neighbours, before the repulsion and startle terms, every lane
+    /// is returned as +∞ without them: none could have won.
     #[inline(always)]
     pub fn energies(&self, d: &Soa, start: usize, count: usize, best: f32) -> [f32; LANES] {
         let ld = |a: &[f32]| -> [f32; LANES] {
@@ -470,6 +471,23 @@ impl Frame {
                 e[l] += w * exp_within(rho * t);
             }
         }
+        // With repulsion neighbours, Eq. 10's term is weighed before them: the sum so far
+        // plus it is a lower bound of E (the repulsion and startle terms left out are
+        // positive, and rounded addition is monotone), so a batch none of whose lanes it
+        // puts below `best` is dropped before its repulsion, at these densities the
+        // costliest part (about 8 neighbours, one root and one exponential each per lane).
+        let acc_first = self.acc_w > 0.0 && self.n_rep > 0;
+        let mut acc = [0.0f32; LANES];
+        if acc_first {
+            acc = self.acceleration(d, start);
+            let mut any = false;
+            for l in 0..LANES {
+                any |= (l < count) & (e[l] + acc[l] < best);
+            }
+            if !any {
+                return [f32::INFINITY; LANES];
+            }
+        }
         // Eq. 4, exact: ‖p′ − p′_j‖ = ‖Rᵀ(p − p′_j) + sΔt‖.
         let dt = self.dt;
         let mut rep = [0.0f32; LANES];
@@ -497,28 +515,47 @@ impl Frame {
             }
         }
         if self.acc_w > 0.0 {
-            if !e.iter().any(|&x| x < best) {
-                return [f32::INFINITY; LANES];
+            if !acc_first {
+                if !e.iter().any(|&x| x < best) {
+                    return [f32::INFINITY; LANES];
+                }
+                acc = self.acceleration(d, start);
             }
-            // Eq. 10 (see Energy::acceleration): a′ = (s − Rᵀv_t)/Δt, so â′·â = b·â/‖b‖ with
-            // b = s − Rᵀv_t, and ‖â′ − â‖² = |â′|² + |â|² − 2â′·â, |·|² 1 or 0.
-            let (ax, ay, az) = (ld(&d.ax), ld(&d.ay), ld(&d.az));
-            let (ahas, alen) = (ld(&d.ahas), ld(&d.alen));
-            let v = self.v;
             for l in 0..LANES {
-                let (bx, by, bz) = (vx[l] - v[0], vy[l] - v[1], vz[l] - v[2]);
-                let lb = (bx * bx + by * by + bz * bz).sqrt();
-                let l1 = lb * self.inv_dt;
-                let has = l1 > 1e-9;
-                let inv = if has { 1.0 / lb } else { 0.0 };
-                let m1 = if has { 1.0 } else { 0.0 };
-                let cos = (bx * ax[l] + by * ay[l] + bz * az[l]) * inv;
-                let dir = (m1 + ahas[l] - 2.0 * cos).max(0.0).sqrt();
-                e[l] += self.acc_w
-                    * (exp_within(rho * dir) + (l1 - alen[l]).abs() * self.inv_mean_accel);
+                e[l] += acc[l];
             }
         }
         e
+    }
+
+    /// Eq. 10's term (see Energy::acceleration) for the [`LANES`] samples of `d` from
+    /// `start`: a′ = (s − Rᵀv_t)/Δt, so â′·â = b·â/‖b‖ with b = s − Rᵀv_t, and
+    /// ‖â′ − â‖² = |â′|² + |â|² − 2â′·â, |·|² 1 or 0.
+    #[inline(always)]
+    fn acceleration(&self, d: &Soa, start: usize) -> [f32; LANES] {
+        let ld = |a: &[f32]| -> [f32; LANES] {
+            a[start..start + LANES]
+                .try_into()
+                .expect("padded to a whole batch")
+        };
+        let (vx, vy, vz) = (ld(&d.vx), ld(&d.vy), ld(&d.vz));
+        let (ax, ay, az) = (ld(&d.ax), ld(&d.ay), ld(&d.az));
+        let (ahas, alen) = (ld(&d.ahas), ld(&d.alen));
+        let (v, rho) = (self.v, self.rho);
+        let mut acc = [0.0f32; LANES];
+        for l in 0..LANES {
+            let (bx, by, bz) = (vx[l] - v[0], vy[l] - v[1], vz[l] - v[2]);
+            let lb = (bx * bx + by * by + bz * bz).sqrt();
+            let l1 = lb * self.inv_dt;
+            let has = l1 > 1e-9;
+            let inv = if has { 1.0 / lb } else { 0.0 };
+            let m1 = if has { 1.0 } else { 0.0 };
+            let cos = (bx * ax[l] + by * ay[l] + bz * az[l]) * inv;
+            let dir = (m1 + ahas[l] - 2.0 * cos).max(0.0).sqrt();
+            acc[l] =
+                self.acc_w * (exp_within(rho * dir) + (l1 - alen[l]).abs() * self.inv_mean_accel);
+        }
+        acc
     }
 }
 
