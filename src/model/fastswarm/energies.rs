@@ -63,11 +63,10 @@ pub struct Attraction {
     p: Vec3,
     /// Neighbours added.
     pub n: usize,
-    f: f32,
-    g: Vec3,
-    s_i: f32,
-    /// xx, yy, zz, xy, xz, yz.
-    m: [f32; 6],
+    /// F, g (x, y, z), Σ f k/d and the matrix's xx, yy, zz, xy, xz, yz, in this order
+    /// (indices [`F`], [`G`], [`S_I`], [`M`]), then zeros: one row of sums per term, so
+    /// that a neighbour's terms are added to them as two vectors.
+    sums: [f32; 16],
     /// Neighbours added but not yet summed: positions by component, and how many (fewer
     /// than [`ATT_LANES`] between calls; room for a whole batch more).
     pending: [[f32; 2 * ATT_LANES]; 3],
@@ -76,6 +75,18 @@ pub struct Attraction {
 
 /// Neighbours an [`Attraction`] buffers before summing them.
 const ATT_LANES: usize = 8;
+
+/// Where each sum sits in [`Attraction`]'s row of sums.
+const F: usize = 0;
+const G: usize = 1;
+const S_I: usize = 4;
+const M: usize = 5;
+/// Terms per neighbour.
+const TERMS: usize = 11;
+
+/// The most neighbours [`Attraction::gather`] takes: a whole 500-agent shape fits, and a
+/// bound keeps the step's cost bounded.
+pub const MAX_GATHER: usize = 512;
 
 impl Attraction {
     /// Empty sums for an agent at `p`.
@@ -86,10 +97,7 @@ impl Attraction {
             inv_d1: 1.0 / d_att1,
             p,
             n: 0,
-            f: 0.0,
-            g: Vec3::ZERO,
-            s_i: 0.0,
-            m: [0.0; 6],
+            sums: [0.0; 16],
             pending: [[0.0; 2 * ATT_LANES]; 3],
             n_pending: 0,
         }
@@ -129,8 +137,8 @@ impl Attraction {
     }
 
     /// Adds the neighbours in the attraction zone, r1 ≤ d < r2, of `cells` (the agent
-    /// `exclude`, itself, left out), at most `limit` in all: the first found, in
-    /// [`CellIndex::for_each_in_shell`]'s order.
+    /// `exclude`, itself, left out), at most `limit` (and [`MAX_GATHER`]) in all: the first
+    /// found, in [`CellIndex::for_each_in_shell`]'s order. The sums must be empty.
     #[inline]
     pub fn gather(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
         #[cfg(target_arch = "x86_64")]
@@ -138,7 +146,7 @@ impl Attraction {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
         }
-        self.gather_batches(cells, exclude, r1, r2, limit);
+        self.gather_batches::<false>(cells, exclude, r1, r2, limit);
     }
 
     /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
@@ -147,11 +155,15 @@ impl Attraction {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true>(cells, exclude, r1, r2, limit);
     }
 
+    /// In two passes: the scan collects the neighbours' positions in a buffer, then their
+    /// terms are summed eight at a time in the order found. Summing as the scan goes
+    /// chained each group's arithmetic to the scan's scattered stores; apart, the sums'
+    /// loop has no dependence but the sums themselves.
     #[inline(always)]
-    fn gather_batches(
+    fn gather_batches<const WIDE: bool>(
         &mut self,
         cells: &CellIndex,
         exclude: usize,
@@ -159,29 +171,72 @@ impl Attraction {
         r2: f32,
         limit: usize,
     ) {
-        let p = self.p;
-        cells.for_each_batch_in_shell(p, r1, r2, |b, mut hits| {
+        debug_assert_eq!(self.n, 0, "gathers into empty sums");
+        let limit = limit.min(MAX_GATHER);
+        let mut buf = [[0.0f32; MAX_GATHER + ATT_LANES]; 3];
+        let mut n = 0;
+        cells.for_each_batch_in_shell(self.p, r1, r2, |b, mut hits| {
             for (l, &j) in b.index.iter().enumerate() {
                 hits &= !(u32::from(j as usize == exclude) << l);
             }
             // Past the limit, only the first hits (rare: a crowd of more than `limit`).
-            let room = limit.saturating_sub(self.n);
+            let room = limit - n;
             while hits.count_ones() as usize > room {
                 hits &= !(1 << (31 - hits.leading_zeros()));
             }
-            self.add_lanes(b.x, b.y, b.z, hits);
+            // Every lane is written and the count advanced by its bit: no branch per hit
+            // (whether a scanned agent is in the zone is unpredictable). n ≤ limit, so
+            // n + l < MAX_GATHER + ATT_LANES.
+            for l in 0..ATT_LANES {
+                buf[0][n] = b.x[l];
+                buf[1][n] = b.y[l];
+                buf[2][n] = b.z[l];
+                n += ((hits >> l) & 1) as usize;
+            }
         });
+        for start in (0..n).step_by(ATT_LANES) {
+            let lanes = |a: &[f32]| -> [f32; ATT_LANES] {
+                a[start..start + ATT_LANES]
+                    .try_into()
+                    .expect("room for a whole group")
+            };
+            let count = (n - start).min(ATT_LANES);
+            self.sum_lanes::<WIDE>(&lanes(&buf[0]), &lanes(&buf[1]), &lanes(&buf[2]), count);
+        }
+        self.n = n;
     }
 
     /// Sums the first [`ATT_LANES`] buffered neighbours (all, when fewer) into F, g,
     /// Σ f k/d and the matrix, and moves the rest to the front.
     #[inline(always)]
     fn sum_pending(&mut self) {
-        let [qx, qy, qz] = self.pending;
+        let [qx, qy, qz] = self.pending.map(|q| {
+            let first: [f32; ATT_LANES] = q[..ATT_LANES].try_into().expect("a group");
+            first
+        });
+        let count = self.n_pending.min(ATT_LANES);
+        self.sum_lanes::<false>(&qx, &qy, &qz, count);
+        for q in &mut self.pending {
+            q.copy_within(ATT_LANES.., 0);
+        }
+        self.n_pending -= count;
+    }
+
+    /// Sums the neighbours at (qx[l], qy[l], qz[l]), l < `count`, into F, g, Σ f k/d and
+    /// the matrix, in lane order; `WIDE` (only where AVX is known to be there) adds them
+    /// as vectors.
+    #[inline(always)]
+    fn sum_lanes<const WIDE: bool>(
+        &mut self,
+        qx: &[f32; ATT_LANES],
+        qy: &[f32; ATT_LANES],
+        qz: &[f32; ATT_LANES],
+        count: usize,
+    ) {
         let (p, k) = (self.p, self.k);
         // Per neighbour, as one would write it for a single one:
         // r = p − q, d = ‖r‖, u = r/d, f = e^{ρ(d/d_att1 − 1)}, c = f (k² − k/d).
-        let mut t = [[0.0f32; ATT_LANES]; 11];
+        let mut t = [[0.0f32; ATT_LANES]; TERMS];
         for l in 0..ATT_LANES {
             let (rx, ry, rz) = (p.x - qx[l], p.y - qy[l], p.z - qz[l]);
             let d = (rx * rx + ry * ry + rz * rz).sqrt().max(1e-6);
@@ -202,19 +257,87 @@ impl Attraction {
             t[9][l] = c * ux * uz;
             t[10][l] = c * uy * uz;
         }
-        let count = self.n_pending.min(ATT_LANES);
+        #[cfg(target_arch = "x86_64")]
+        if WIDE && count == ATT_LANES {
+            // SAFETY: WIDE is set only under gather_avx2, run once AVX2 was detected.
+            unsafe { add_columns_avx(&mut self.sums, &t) };
+            return;
+        }
         for l in 0..count {
-            self.f += t[0][l];
-            self.g += Vec3::new(t[1][l], t[2][l], t[3][l]);
-            self.s_i += t[4][l];
-            for (m, t) in self.m.iter_mut().zip(&t[5..]) {
-                *m += t[l];
+            for (sum, row) in self.sums.iter_mut().zip(&t) {
+                *sum += row[l];
             }
         }
-        for q in &mut self.pending {
-            q.copy_within(ATT_LANES.., 0);
+    }
+}
+
+/// Adds to `sums` each column of `t` (one neighbour's terms) in turn, column 0 first: the
+/// same additions, so the same bits, as term by term, but two vector additions per
+/// neighbour instead of eleven scalar ones, after a transpose.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn add_columns_avx(sums: &mut [f32; 16], t: &[[f32; ATT_LANES]; TERMS]) {
+    use std::arch::x86_64::*;
+    /// The columns of the 8 × 8 block of rows `r`, one register each.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn transpose(r: [__m256; 8]) -> [__m256; 8] {
+        let u = [
+            _mm256_unpacklo_ps(r[0], r[1]),
+            _mm256_unpackhi_ps(r[0], r[1]),
+            _mm256_unpacklo_ps(r[2], r[3]),
+            _mm256_unpackhi_ps(r[2], r[3]),
+            _mm256_unpacklo_ps(r[4], r[5]),
+            _mm256_unpackhi_ps(r[4], r[5]),
+            _mm256_unpacklo_ps(r[6], r[7]),
+            _mm256_unpackhi_ps(r[6], r[7]),
+        ];
+        // v[c] holds rows 0–3 (low half: column c, high half: column c + 4), w[c] rows 4–7.
+        let v = [
+            _mm256_shuffle_ps::<0x44>(u[0], u[2]),
+            _mm256_shuffle_ps::<0xEE>(u[0], u[2]),
+            _mm256_shuffle_ps::<0x44>(u[1], u[3]),
+            _mm256_shuffle_ps::<0xEE>(u[1], u[3]),
+        ];
+        let w = [
+            _mm256_shuffle_ps::<0x44>(u[4], u[6]),
+            _mm256_shuffle_ps::<0xEE>(u[4], u[6]),
+            _mm256_shuffle_ps::<0x44>(u[5], u[7]),
+            _mm256_shuffle_ps::<0xEE>(u[5], u[7]),
+        ];
+        [
+            _mm256_permute2f128_ps::<0x20>(v[0], w[0]),
+            _mm256_permute2f128_ps::<0x20>(v[1], w[1]),
+            _mm256_permute2f128_ps::<0x20>(v[2], w[2]),
+            _mm256_permute2f128_ps::<0x20>(v[3], w[3]),
+            _mm256_permute2f128_ps::<0x31>(v[0], w[0]),
+            _mm256_permute2f128_ps::<0x31>(v[1], w[1]),
+            _mm256_permute2f128_ps::<0x31>(v[2], w[2]),
+            _mm256_permute2f128_ps::<0x31>(v[3], w[3]),
+        ]
+    }
+    // SAFETY (loads and stores): each reads or writes 8 floats of an array of 8 or 16.
+    unsafe {
+        let row = |k: usize| {
+            if k < TERMS {
+                _mm256_loadu_ps(t[k].as_ptr())
+            } else {
+                _mm256_setzero_ps()
+            }
+        };
+        let a = transpose(std::array::from_fn(row));
+        let b = transpose(std::array::from_fn(|k| row(k + 8)));
+        let (mut sa, mut sb) = (
+            _mm256_loadu_ps(sums.as_ptr()),
+            _mm256_loadu_ps(sums[8..].as_ptr()),
+        );
+        for l in 0..ATT_LANES {
+            sa = _mm256_add_ps(sa, a[l]);
+            sb = _mm256_add_ps(sb, b[l]);
         }
-        self.n_pending -= count;
+        _mm256_storeu_ps(sums.as_mut_ptr(), sa);
+        _mm256_storeu_ps(sums[8..].as_mut_ptr(), sb);
     }
 }
 
@@ -318,14 +441,15 @@ impl Energy {
         let mut a = *a;
         a.sum_pending();
         let (f, g, h) = if w > 0.0 && a.n > 0 {
-            let m = a.m;
+            let (m, s_i) = (&a.sums[M..M + 6], a.sums[S_I]);
             let h = Mat3::from_cols(
-                Vec3::new(m[0] + a.s_i, m[3], m[4]),
-                Vec3::new(m[3], m[1] + a.s_i, m[5]),
-                Vec3::new(m[4], m[5], m[2] + a.s_i),
+                Vec3::new(m[0] + s_i, m[3], m[4]),
+                Vec3::new(m[3], m[1] + s_i, m[5]),
+                Vec3::new(m[4], m[5], m[2] + s_i),
             );
             let wn = w / a.n as f32;
-            (a.f * wn, a.g * wn, h * wn)
+            let g = Vec3::from_slice(&a.sums[G..G + 3]);
+            (a.sums[F] * wn, g * wn, h * wn)
         } else {
             (0.0, Vec3::ZERO, Mat3::ZERO)
         };
@@ -623,13 +747,14 @@ mod tests {
             m[5] += c * u.y * u.z;
         }
         assert_eq!(a.n, 21);
-        assert_eq!(a.f.to_bits(), f.to_bits());
+        let want = [f, g.x, g.y, g.z, s_i, m[0], m[1], m[2], m[3], m[4], m[5]];
         assert_eq!(
-            a.g.to_array().map(f32::to_bits),
-            g.to_array().map(f32::to_bits)
+            a.sums[..TERMS]
+                .iter()
+                .map(|x| x.to_bits())
+                .collect::<Vec<_>>(),
+            want.map(f32::to_bits)
         );
-        assert_eq!(a.s_i.to_bits(), s_i.to_bits());
-        assert_eq!(a.m.map(f32::to_bits), m.map(f32::to_bits));
     }
 
     #[test]
@@ -654,14 +779,7 @@ mod tests {
         let bits = |a: &Attraction| {
             let mut a = *a;
             a.sum_pending();
-            let g = a.g.to_array().map(f32::to_bits);
-            (
-                a.n,
-                a.f.to_bits(),
-                g,
-                a.s_i.to_bits(),
-                a.m.map(f32::to_bits),
-            )
+            (a.n, a.sums.map(f32::to_bits))
         };
         let mut cut = 0;
         for (i, &p) in pts.iter().enumerate().take(60) {
