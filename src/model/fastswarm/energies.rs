@@ -15,7 +15,7 @@ use glam::{Mat3, Vec3};
 /// multiplies and adds, so it gives the same bits on every platform (libm's `exp` need
 /// not), and it vectorises: the integer part is rounded by adding 1.5 × 2²³, which leaves
 /// it in the low mantissa bits (no float-to-int conversion), and the selection evaluates
-/// it for eight candidates at once.
+/// it for a whole batch of candidates at once.
 #[inline(always)]
 pub fn fast_exp(x: f32) -> f32 {
     exp_within(x.clamp(-87.0, 87.0))

@@ -39,6 +39,13 @@ pub fn select(
     allowed: impl Fn(Vec3) -> bool,
 ) -> Option<Choice> {
     #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512vl")
+    {
+        // SAFETY: the CPU has AVX-512 F and VL, checked just above.
+        return unsafe { select_avx512(e, db, range, free_angle, allowed) };
+    }
+    #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
         return unsafe { select_avx2(e, db, range, free_angle, allowed) };
@@ -47,11 +54,26 @@ pub fn select(
 }
 
 /// [`select_in_batches`] compiled for AVX2 (eight lanes in one instruction instead of
-/// two). The same IEEE operations in the same order (no fused multiply-add: AVX2 does
+/// four). The same IEEE operations in the same order (no fused multiply-add: AVX2 does
 /// not enable it, and Rust never contracts), so the same bits as without.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn select_avx2(
+    e: &Energy,
+    db: &Database,
+    range: std::ops::Range<usize>,
+    free_angle: f32,
+    allowed: impl Fn(Vec3) -> bool,
+) -> Option<Choice> {
+    select_in_batches(e, db, range, free_angle, allowed)
+}
+
+/// [`select_in_batches`] compiled for AVX-512 (a batch of sixteen lanes in one
+/// instruction, 32 vector registers): the same operations, so the same bits, as
+/// [`select_avx2`] (AVX-512 brings no fused multiply-add either unless asked for).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
+fn select_avx512(
     e: &Energy,
     db: &Database,
     range: std::ops::Range<usize>,
@@ -168,7 +190,7 @@ mod tests {
 
     #[test]
     fn every_instruction_set_chooses_the_same_bits() {
-        // The AVX2 build of the batches against the portable one, over agents in every
+        // The AVX2 and AVX-512 builds of the batches against the portable one, over agents in every
         // heading and speed group: the same choice and the same energy bits.
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
@@ -187,9 +209,16 @@ mod tests {
                 let (angle, range) = (r() * 3.0, db.candidates(v.length()));
                 let portable = select_in_batches(&e, db, range.clone(), angle, |_| true);
                 // SAFETY: AVX2 checked above.
-                let avx2 = unsafe { select_avx2(&e, db, range, angle, |_| true) };
+                let avx2 = unsafe { select_avx2(&e, db, range.clone(), angle, |_| true) };
                 let bits = |c: Option<Choice>| c.map(|c| (c.index, c.energy.to_bits()));
                 assert_eq!(bits(portable), bits(avx2));
+                if std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                {
+                    // SAFETY: AVX-512 F and VL checked just above.
+                    let avx512 = unsafe { select_avx512(&e, db, range, angle, |_| true) };
+                    assert_eq!(bits(portable), bits(avx512));
+                }
             }
         }
     }
