@@ -84,6 +84,10 @@ const M: usize = 5;
 /// Terms per neighbour.
 const TERMS: usize = 11;
 
+/// The most neighbours [`Attraction::gather`] sums at once: 16 in the AVX-512 build (one
+/// register per quantity), 8 in the others (16 there measured slower).
+const MAX_GROUP: usize = 16;
+
 /// The most neighbours [`Attraction::gather`] takes: a whole 500-agent shape fits, and a
 /// bound keeps the step's cost bounded.
 pub const MAX_GATHER: usize = 512;
@@ -142,11 +146,18 @@ impl Attraction {
     #[inline]
     pub fn gather(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
         #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
+            // SAFETY: the CPU has AVX-512 F and VL, checked just above.
+            return unsafe { self.gather_avx512(cells, exclude, r1, r2, limit) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
         }
-        self.gather_batches::<false>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<false, 8>(cells, exclude, r1, r2, limit);
     }
 
     /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
@@ -155,15 +166,23 @@ impl Attraction {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, 8>(cells, exclude, r1, r2, limit);
+    }
+
+    /// [`Self::gather_batches`] compiled for AVX-512, summing 16 neighbours at once (one
+    /// register per quantity): the same additions in the same order, so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
+        self.gather_batches::<true, 16>(cells, exclude, r1, r2, limit);
     }
 
     /// In two passes: the scan collects the neighbours' positions in a buffer, then their
-    /// terms are summed eight at a time in the order found. Summing as the scan goes
+    /// terms are summed `N` at a time in the order found. Summing as the scan goes
     /// chained each group's arithmetic to the scan's scattered stores; apart, the sums'
     /// loop has no dependence but the sums themselves.
     #[inline(always)]
-    fn gather_batches<const WIDE: bool>(
+    fn gather_batches<const WIDE: bool, const N: usize>(
         &mut self,
         cells: &CellIndex,
         exclude: usize,
@@ -173,7 +192,7 @@ impl Attraction {
     ) {
         debug_assert_eq!(self.n, 0, "gathers into empty sums");
         let limit = limit.min(MAX_GATHER);
-        let mut buf = [[0.0f32; MAX_GATHER + ATT_LANES]; 3];
+        let mut buf = [[0.0f32; MAX_GATHER + MAX_GROUP]; 3];
         let mut n = 0;
         cells.for_each_batch_in_shell(self.p, r1, r2, |b, mut hits| {
             for (l, &j) in b.index.iter().enumerate() {
@@ -194,14 +213,14 @@ impl Attraction {
                 n += ((hits >> l) & 1) as usize;
             }
         });
-        for start in (0..n).step_by(ATT_LANES) {
-            let lanes = |a: &[f32]| -> [f32; ATT_LANES] {
-                a[start..start + ATT_LANES]
+        for start in (0..n).step_by(N) {
+            let lanes = |a: &[f32]| -> [f32; N] {
+                a[start..start + N]
                     .try_into()
                     .expect("room for a whole group")
             };
-            let count = (n - start).min(ATT_LANES);
-            self.sum_lanes::<WIDE>(&lanes(&buf[0]), &lanes(&buf[1]), &lanes(&buf[2]), count);
+            let count = (n - start).min(N);
+            self.sum_lanes::<WIDE, N>(&lanes(&buf[0]), &lanes(&buf[1]), &lanes(&buf[2]), count);
         }
         self.n = n;
     }
@@ -215,7 +234,7 @@ impl Attraction {
             first
         });
         let count = self.n_pending.min(ATT_LANES);
-        self.sum_lanes::<false>(&qx, &qy, &qz, count);
+        self.sum_lanes::<false, ATT_LANES>(&qx, &qy, &qz, count);
         for q in &mut self.pending {
             q.copy_within(ATT_LANES.., 0);
         }
@@ -226,18 +245,18 @@ impl Attraction {
     /// the matrix, in lane order; `WIDE` (only where AVX is known to be there) adds them
     /// as vectors.
     #[inline(always)]
-    fn sum_lanes<const WIDE: bool>(
+    fn sum_lanes<const WIDE: bool, const N: usize>(
         &mut self,
-        qx: &[f32; ATT_LANES],
-        qy: &[f32; ATT_LANES],
-        qz: &[f32; ATT_LANES],
+        qx: &[f32; N],
+        qy: &[f32; N],
+        qz: &[f32; N],
         count: usize,
     ) {
         let (p, k) = (self.p, self.k);
         // Per neighbour, as one would write it for a single one:
         // r = p − q, d = ‖r‖, u = r/d, f = e^{ρ(d/d_att1 − 1)}, c = f (k² − k/d).
-        let mut t = [[0.0f32; ATT_LANES]; TERMS];
-        for l in 0..ATT_LANES {
+        let mut t = [[0.0f32; N]; TERMS];
+        for l in 0..N {
             let (rx, ry, rz) = (p.x - qx[l], p.y - qy[l], p.z - qz[l]);
             let d = (rx * rx + ry * ry + rz * rz).sqrt().max(1e-6);
             let inv = 1.0 / d;
@@ -258,9 +277,15 @@ impl Attraction {
             t[10][l] = c * uy * uz;
         }
         #[cfg(target_arch = "x86_64")]
-        if WIDE && count == ATT_LANES {
-            // SAFETY: WIDE is set only under gather_avx2, run once AVX2 was detected.
-            unsafe { add_columns_avx(&mut self.sums, &t) };
+        if WIDE && count == N && N.is_multiple_of(ATT_LANES) {
+            for h in (0..N).step_by(ATT_LANES) {
+                let block = t.map(|row| {
+                    let part: [f32; ATT_LANES] = row[h..h + ATT_LANES].try_into().expect("8");
+                    part
+                });
+                // SAFETY: WIDE is set only under gather_avx2, run once AVX2 was detected.
+                unsafe { add_columns_avx(&mut self.sums, &block) };
+            }
             return;
         }
         for l in 0..count {
@@ -794,6 +819,17 @@ mod tests {
                 batched.gather(&cells, i, d1, d2, limit);
                 cut += usize::from(limit == 13 && one.n == 13);
                 assert_eq!(bits(&one), bits(&batched), "agent {i}, limit {limit}");
+                // Every build, whichever `gather` picked on this CPU.
+                let mut portable = Attraction::new(rho, d1, p);
+                portable.gather_batches::<false, 8>(&cells, i, d1, d2, limit);
+                assert_eq!(bits(&one), bits(&portable), "agent {i}, limit {limit}");
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    let mut avx2 = Attraction::new(rho, d1, p);
+                    // SAFETY: AVX2 checked just above.
+                    unsafe { avx2.gather_avx2(&cells, i, d1, d2, limit) };
+                    assert_eq!(bits(&one), bits(&avx2), "agent {i}, limit {limit}");
+                }
             }
         }
         assert!(cut > 40, "{cut}");
