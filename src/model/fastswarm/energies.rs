@@ -194,9 +194,14 @@ impl Attraction {
         let limit = limit.min(MAX_GATHER);
         let mut buf = [[0.0f32; MAX_GATHER + MAX_GROUP]; 3];
         let mut n = 0;
+        // The agent itself, at distance 0, is in the shell only when r1² is 0 (the test
+        // of every lane's index against it was 3 % of the step).
+        let may_hold_self = r1 * r1 <= 0.0;
         cells.for_each_batch_in_shell(self.p, r1, r2, |b, mut hits| {
-            for (l, &j) in b.index.iter().enumerate() {
-                hits &= !(u32::from(j as usize == exclude) << l);
+            if may_hold_self {
+                for (l, &j) in b.index.iter().enumerate() {
+                    hits &= !(u32::from(j as usize == exclude) << l);
+                }
             }
             // Past the limit, only the first hits (rare: a crowd of more than `limit`).
             let room = limit - n;
@@ -808,27 +813,36 @@ mod tests {
         };
         let mut cut = 0;
         for (i, &p) in pts.iter().enumerate().take(60) {
-            for limit in [512, 13] {
+            // r1 = 0: the agent itself is in the shell, and must be left out.
+            for (r1, limit) in [(d1, 512), (d1, 13), (0.0, 512)] {
                 let mut one = Attraction::new(rho, d1, p);
-                cells.for_each_in_shell(p, d1, d2, |j, q| {
+                cells.for_each_in_shell(p, r1, d2, |j, q| {
                     if j != i && one.n < limit {
                         one.add(q);
                     }
                 });
                 let mut batched = Attraction::new(rho, d1, p);
-                batched.gather(&cells, i, d1, d2, limit);
+                batched.gather(&cells, i, r1, d2, limit);
                 cut += usize::from(limit == 13 && one.n == 13);
-                assert_eq!(bits(&one), bits(&batched), "agent {i}, limit {limit}");
+                assert_eq!(
+                    bits(&one),
+                    bits(&batched),
+                    "agent {i}, r1 {r1}, limit {limit}"
+                );
                 // Every build, whichever `gather` picked on this CPU.
                 let mut portable = Attraction::new(rho, d1, p);
-                portable.gather_batches::<false, 8>(&cells, i, d1, d2, limit);
-                assert_eq!(bits(&one), bits(&portable), "agent {i}, limit {limit}");
+                portable.gather_batches::<false, 8>(&cells, i, r1, d2, limit);
+                assert_eq!(
+                    bits(&one),
+                    bits(&portable),
+                    "agent {i}, r1 {r1}, limit {limit}"
+                );
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
                     let mut avx2 = Attraction::new(rho, d1, p);
                     // SAFETY: AVX2 checked just above.
-                    unsafe { avx2.gather_avx2(&cells, i, d1, d2, limit) };
-                    assert_eq!(bits(&one), bits(&avx2), "agent {i}, limit {limit}");
+                    unsafe { avx2.gather_avx2(&cells, i, r1, d2, limit) };
+                    assert_eq!(bits(&one), bits(&avx2), "agent {i}, r1 {r1}, limit {limit}");
                 }
             }
         }
