@@ -23,16 +23,13 @@ use crate::field::CurlNoise;
 use crate::math::{self, Rng};
 use crate::species::{Channel, HONEYBEE};
 use database::Database;
-use energies::{Attraction, Energy, MAX_STIMULI};
+use energies::{Attraction, Energy, MAX_GATHER, MAX_STIMULI};
 use glam::Vec3;
 use params::FastswarmParams;
 use shape::Tour;
 
 /// Random stream of the free rotation (selection.rs).
 const TURN_STREAM: u64 = 0xFA57_5A4D;
-/// The most attraction neighbours an agent averages over (Eq. 6): a whole 500-agent shape
-/// fits, and a bound keeps the step's cost bounded.
-const MAX_ATTRACTION: usize = 512;
 /// Time constant of the body's heading following the direction of travel, s.
 const HEADING_LAG: f32 = 0.04;
 
@@ -217,14 +214,10 @@ impl Model for FastswarmModel {
         let calm = if startled { 0.0 } else { 1.0 };
         let w_oa = p.w_oa as f32 * calm;
         // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
-        // more, the first MAX_ATTRACTION found (the sum is an average).
+        // more, the first MAX_GATHER found (the sum is an average).
         let mut att = Attraction::new(self.rho, d_att1, pos);
         if w_oa > 0.0 {
-            self.cells.for_each_in_shell(pos, d_att1, d_att2, |j, q| {
-                if j != i && att.n < MAX_ATTRACTION {
-                    att.add(q);
-                }
-            });
+            att.gather(&self.cells, i, d_att1, d_att2, MAX_GATHER);
         }
         e.attraction_sums(w_oa, &att);
         if let Some(c) = self.center {
