@@ -225,36 +225,6 @@ where
         };
         let radius = |i: usize| m.reach() + agents[i].radius + max_body_radius;
         let fresh = match listing {
-            // A frame that keeps no candidates: the grid's lists in the grid's order.
-            Listing::Fresh if !sort => {
-                self.gathered.clear();
-                self.gathered
-                    .par_extend(self.order.par_iter().with_min_len(256).map(|&k| {
-                        let mut list = NeighbourList::default();
-                        // Cancelled: the rest of this pass is skipped (the state is abandoned).
-                        if cancel.load(Ordering::Relaxed) {
-                            return (list, (0.0, 0.0));
-                        }
-                        // As `sums`, written out: called here too, the closure is not
-                        // inlined, and the call costs the bee about 1 % (callgrind; an
-                        // `#[inline(always)]` function for all three paths measured bee
-                        // +39 instructions per step, boids −25).
-                        let i = start + k as usize;
-                        let me = &agents[i];
-                        let ri = me.radius;
-                        list.fill(grid, me.pos, m.reach() + ri + max_body_radius, i);
-                        if !M::GATHERS {
-                            return (list, (0.0, 0.0));
-                        }
-                        let mut sum = m.gather_term(ri, me, 0.0);
-                        for &j in list.indices() {
-                            let o = &agents[j as usize];
-                            sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
-                        }
-                        (list, m.gather_finish(targets, me.pos, ri, sum))
-                    }));
-                true
-            }
             Listing::Fresh | Listing::Reuse => {
                 let (candidates, ranges) = (&self.candidates, &self.ranges);
                 let reuse = listing == Listing::Reuse;
