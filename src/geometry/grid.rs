@@ -380,17 +380,13 @@ impl Grid {
                 count += self.starts[row + hi.x as usize + 1] - self.starts[row + lo.x as usize];
             }
         }
-        if count == 0 {
-            return f32::INFINITY;
-        }
-        // (3 k / (4 π ρ))^(1/3) with ρ = count / (cells · cell³), in whole cubic cells.
         let cells = (hi - lo + IVec3::ONE).element_product() as f32 / self.split as f32;
-        let r = (3.0 * k as f32 * cells / (4.0 * std::f32::consts::PI * count as f32)).cbrt();
-        GUESS_MARGIN * r * self.cell
+        self.kth_distance_cubed(k, count, cells).cbrt()
     }
 
     /// The cube of `kth_distance_guess`'s distance for `count` points in `cells` whole
-    /// cells (infinite without points).
+    /// cells: margin³ · 3 k / (4 π ρ) with ρ = count / (cells · cell³) (infinite without
+    /// points).
     fn kth_distance_cubed(&self, k: usize, count: u32, cells: f32) -> f32 {
         if count == 0 {
             return f32::INFINITY;
