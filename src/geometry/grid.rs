@@ -90,8 +90,9 @@ impl Grid {
         (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize
     }
 
-    /// Every point's index, cell by cell (rows of cells along x, in increasing index order
-    /// within a cell): queries run in this order share the rows they read.
+    /// Every point's index, cell by cell (rows of cells along x; within a cell, in the
+    /// build's visiting order, by default increasing index): queries run in this order
+    /// share the rows they read.
     pub fn order(&self) -> &[u32] {
         &self.items[..self.len()]
     }
@@ -118,7 +119,22 @@ impl Grid {
     /// the world, such as bees inside their hive): queries never return them. `except` is
     /// empty (leave out none) or one flag per point.
     pub fn build_except(&mut self, positions: &[Vec3], radius: f32, except: &[bool]) {
+        self.build_visiting(positions, radius, except, &[]);
+    }
+
+    /// As [`Grid::build_except`], putting the points into their cells in the order of
+    /// `visit` (every point's index once; empty: increasing index), which is then their
+    /// order within each cell, so also the order queries list them in. The world visits
+    /// agents by id, so that neither depends on where it stores them.
+    pub fn build_visiting(
+        &mut self,
+        positions: &[Vec3],
+        radius: f32,
+        except: &[bool],
+        visit: &[u32],
+    ) {
         debug_assert!(except.is_empty() || except.len() == positions.len());
+        debug_assert!(visit.is_empty() || visit.len() == positions.len());
         let n = positions.len();
         let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (lo, hi) = positions
@@ -132,7 +148,7 @@ impl Grid {
         };
         let radius = radius.max(1e-6);
         self.layout(lo, hi, self.capped(lo, hi, radius, n, 1), 1);
-        self.sort(positions, except);
+        self.sort(positions, except, visit);
         // How crowded a typical agent's cell is: the agent-weighted mean occupancy.
         let crowd = self
             .starts
@@ -149,7 +165,7 @@ impl Grid {
             let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n, X_SPLIT);
             if cell < self.cell * 0.9 {
                 self.layout(lo, hi, cell, X_SPLIT);
-                self.sort(positions, except);
+                self.sort(positions, except, visit);
             }
         }
     }
@@ -181,8 +197,9 @@ impl Grid {
         self.dims = ((extent * self.inv_cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
     }
 
-    /// Counting sort of the agents by cell, leaving out those flagged in `except`.
-    fn sort(&mut self, positions: &[Vec3], except: &[bool]) {
+    /// Counting sort of the agents by cell, in the order of `visit` (empty: by index),
+    /// leaving out those flagged in `except`.
+    fn sort(&mut self, positions: &[Vec3], except: &[bool], visit: &[u32]) {
         // `except` is empty in shots without hidden agents: one test, hoisted out of the loops.
         let some = !except.is_empty();
         let out = |i: usize| some && except[i];
@@ -211,13 +228,18 @@ impl Grid {
         self.slot.clear();
         self.slot.resize(positions.len(), u32::MAX);
         let mut fill = self.starts[..total].to_vec();
-        for (i, &c) in cells.iter().enumerate() {
+        let mut place = |i: usize| {
             if !out(i) {
-                let f = &mut fill[c as usize];
+                let f = &mut fill[cells[i] as usize];
                 self.items[*f as usize] = i as u32;
                 self.slot[i] = *f;
                 *f += 1;
             }
+        };
+        if visit.is_empty() {
+            (0..cells.len()).for_each(&mut place);
+        } else {
+            visit.iter().for_each(|&i| place(i as usize));
         }
         self.cells = cells;
         // Positions in items order: one pass filling the three axes (three passes each
@@ -236,6 +258,22 @@ impl Grid {
                 let p = positions[i as usize];
                 (*x, *y, *z) = (p.x, p.y, p.z);
             });
+    }
+
+    /// Renames the points: point i becomes point `new_of_old[i]` (a permutation of the
+    /// indices), in the same cell and the same place in it. For the world, which moves its
+    /// agents into the grid's order after a build (`crate::sim::world`, "cell order").
+    pub fn relabel(&mut self, new_of_old: &[u32]) {
+        debug_assert_eq!(new_of_old.len(), self.slot.len());
+        let n = self.len();
+        self.items[..n]
+            .par_iter_mut()
+            .with_min_len(4096)
+            .for_each(|i| *i = new_of_old[*i as usize]);
+        self.slot.iter_mut().for_each(|s| *s = u32::MAX);
+        for (t, &i) in self.items[..n].iter().enumerate() {
+            self.slot[i as usize] = t as u32;
+        }
     }
 
     /// Writes into `out` the indices of the (at most) `k` points nearest `p` strictly
@@ -728,6 +766,45 @@ mod tests {
         check(&pts, 0.1, 16);
         check(&pts, 0.3, 16);
         check(&pts, 0.3, 1);
+    }
+
+    #[test]
+    fn a_relabelled_grid_answers_as_one_built_over_the_points_in_their_new_places() {
+        // The world's cell order: build visiting points by id, move every point to its
+        // place in the grid's order, relabel. A grid built afresh over the moved points,
+        // visited by the same ids, must answer every query alike, in the same order.
+        for (seed, n, size) in [(8, 3000, 1.0), (9, 6000, 0.1)] {
+            let pts = cloud(seed, n, size);
+            // Ids a fixed shuffle of the indices: id k is stored at index by_id[k].
+            let mut by_id: Vec<u32> = (0..n as u32).collect();
+            let mut rng = crate::math::Rng::new(seed, 1, 1);
+            for k in (1..n).rev() {
+                by_id.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+            }
+            let mut g = Grid::default();
+            g.build_visiting(&pts, 0.2, &[], &by_id);
+            let mut new_of_old = vec![0u32; n];
+            for (t, &i) in g.order().iter().enumerate() {
+                new_of_old[i as usize] = t as u32;
+            }
+            g.relabel(&new_of_old);
+            let mut moved = vec![Vec3::ZERO; n];
+            for (i, p) in pts.iter().enumerate() {
+                moved[new_of_old[i] as usize] = *p;
+            }
+            let moved_by_id: Vec<u32> = by_id.iter().map(|&i| new_of_old[i as usize]).collect();
+            let mut fresh = Grid::default();
+            fresh.build_visiting(&moved, 0.2, &[], &moved_by_id);
+            assert!(g.order().iter().enumerate().all(|(t, &i)| i == t as u32));
+            assert_eq!(g.order(), fresh.order());
+            let (mut a, mut b) = ([0u32; MAX_K], [0u32; MAX_K]);
+            for i in (0..n).step_by(7) {
+                let la = g.nearest(moved[i], 0.2, 16, i, &mut a);
+                let lb = fresh.nearest(moved[i], 0.2, 16, i, &mut b);
+                assert_eq!(a[..la], b[..lb], "point {i}");
+                assert!(!a[..la].contains(&(i as u32)));
+            }
+        }
     }
 
     #[test]

@@ -1,8 +1,11 @@
 //! What the world lends a model during a step: read-only, shared by every agent.
 //!
-//! Conventions: metres, seconds, world Y-up right-handed. Agent indices are global (shot
-//! order, every swarm's agents one after another), so a model sees other swarms' agents as
-//! neighbours too.
+//! Conventions: metres, seconds, world Y-up right-handed. An agent index `i` is where the
+//! agent is stored this substep: global (every swarm's agents one after another, so a model
+//! sees other swarms' agents as neighbours too), but within its swarm in the grid's cell
+//! order, which the world renews as agents move (`crate::sim::world`, "cell order"). An
+//! agent's identity — its place in the shot's order, which seeds its random numbers and
+//! names it in the caches — is [`Context::id`].
 
 use super::targets::TargetKind;
 use crate::geometry::{Grid, Shape, SurfaceQuery};
@@ -54,16 +57,16 @@ impl NeighbourList {
         self.len = grid.nearest(p, radius, MAX_NEIGHBOURS, me, &mut self.idx) as u8;
     }
 
-    /// Puts the list in increasing index order (insertion sort: at most 16 entries): the
-    /// order lists reused over substeps (`crate::sim::skin`) are kept in, so that a list
-    /// found by the grid and one picked from candidates are the same list, and every sum
-    /// over it the same sum.
-    pub(crate) fn sort(&mut self) {
+    /// Puts the list in increasing id order (`ids`: every agent's id by index; insertion
+    /// sort: at most 16 entries): the order lists reused over substeps (`crate::sim::skin`)
+    /// are kept in, so that a list found by the grid and one picked from candidates are the
+    /// same list, and every sum over it the same sum.
+    pub(crate) fn sort(&mut self, ids: &[u32]) {
         let idx = &mut self.idx[..self.len as usize];
         for i in 1..idx.len() {
             let v = idx[i];
             let mut j = i;
-            while j > 0 && idx[j - 1] > v {
+            while j > 0 && ids[idx[j - 1] as usize] > ids[v as usize] {
                 idx[j] = idx[j - 1];
                 j -= 1;
             }
@@ -71,7 +74,7 @@ impl NeighbourList {
         }
     }
 
-    /// Appends agent `j` (callers append in increasing index order, and at most
+    /// Appends agent `j` (callers append in increasing id order, and at most
     /// `MAX_NEIGHBOURS`).
     #[inline]
     pub(crate) fn push(&mut self, j: u32) {
@@ -137,14 +140,38 @@ pub struct Context<'a> {
     /// Every agent's neighbour record (previous state), by global index.
     pub agents: &'a [Neighbour],
     pub(crate) lists: &'a [NeighbourList],
+    /// Every agent's id by index, and its index by id (see the module notes).
+    pub(crate) ids: &'a [u32],
+    pub(crate) slots: &'a [u32],
 }
 
 impl Context<'_> {
-    /// A deterministic random stream for agent `i` at this step: the same numbers whatever
-    /// the number of threads. `stream` separates a model's independent uses.
+    /// A deterministic random stream for agent `i` at this step, drawn from its id: the
+    /// same numbers whatever the number of threads and wherever the agent is stored.
+    /// `stream` separates a model's independent uses.
     #[inline]
     pub fn rng(&self, stream: u64, i: usize) -> Rng {
-        Rng::new(self.seed ^ stream, i as u64, self.step)
+        Rng::new(self.seed ^ stream, self.id(i) as u64, self.step)
+    }
+
+    /// Agent `i`'s id: its place in the shot's order (every swarm's agents one after
+    /// another), the same all through the shot.
+    #[inline]
+    pub fn id(&self, i: usize) -> usize {
+        self.ids[i] as usize
+    }
+
+    /// Every agent's index, in id order.
+    #[inline]
+    pub fn indices_by_id(&self) -> &[u32] {
+        self.slots
+    }
+
+    /// A deterministic direction separating coincident agents i and j, opposite for j and
+    /// i (from their ids).
+    #[inline]
+    pub fn separation_fallback(&self, i: usize, j: usize) -> Vec3 {
+        crate::model::flight::separation_fallback(self.id(i), self.id(j))
     }
 
     /// Agent i's neighbours within `reach`, in a fixed order (so sums are the same

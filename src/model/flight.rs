@@ -134,7 +134,7 @@ impl Flight {
         cx.for_each_neighbour(i, ri + cx.max_body_radius, |j, pj, d2| {
             let o = &cx.agents[j];
             a_col += self.contact(
-                || separation_fallback(i, j),
+                || cx.separation_fallback(i, j),
                 ri + o.radius,
                 c.pos - pj,
                 d2.sqrt(),
@@ -388,7 +388,8 @@ pub fn sweep(obstacles: &[Shape], from: Vec3, to: Vec3, mut vel: Vec3, ri: f32) 
     }
 }
 
-/// A deterministic direction separating coincident agents i and j (opposite for j and i).
+/// A deterministic direction separating coincident agents with ids i and j (opposite for j
+/// and i): see [`crate::model::Context::separation_fallback`].
 pub fn separation_fallback(i: usize, j: usize) -> Vec3 {
     let (a, b, sign) = if i < j { (i, j, 1.0) } else { (j, i, -1.0) };
     Rng::new(a as u64, b as u64, 0x5EA).unit_vector() * sign

@@ -1,8 +1,9 @@
 //! Neighbour candidates reused over substeps (Verlet lists with a skin).
 //!
 //! An agent's neighbour list is the (at most) `k = MAX_NEIGHBOURS` agents nearest it
-//! strictly within its radius R, ties broken by index, kept in increasing index order
-//! (docs/model.md, "Bounded neighbours"). Agents move a few millimetres per substep and R
+//! strictly within its radius R, ties broken by id, kept in increasing id order
+//! (docs/model.md, "Bounded neighbours"; an agent's id is its place in the shot, its index
+//! where the world stores it, `crate::model::Context::id`). Agents move a few millimetres per substep and R
 //! is 0.15–0.3 m, so the grid query that finds them (most of the gather pass) mostly finds
 //! the same agents again. At a rebuild each agent keeps, besides its list, every agent
 //! within
@@ -27,8 +28,8 @@
 //! slack of 1e-5 on L.
 //!
 //! A list picked from candidates is the list the grid would find (ties aside: the grid
-//! breaks an exact tie at the k-th distance by its walk order, this by index), in the same
-//! index order, so every sum over neighbours is the same bit for bit whether the list was
+//! breaks an exact tie at the k-th distance by its walk order, this by id), in the same
+//! id order, so every sum over neighbours is the same bit for bit whether the list was
 //! found afresh or reused (`reused_lists_step_exactly_as_fresh_ones`).
 //!
 //! An agent with more than [`MAX_CANDIDATES`] within L (a crowd: at 100,000 per m³ d_k is
@@ -57,24 +58,25 @@ pub fn limit(radius: f32, kth: f32, sigma: f32) -> f32 {
     (radius.min(kth + sigma) + sigma) * (1.0 + SLACK)
 }
 
-/// Sorting key of a candidate: squared distance, then index (non-negative floats order
-/// as their bits do).
+/// Sorting key of a candidate: squared distance, then id (non-negative floats order as
+/// their bits do).
 #[inline(always)]
-fn key(j: u32, d2: f32) -> u64 {
-    ((d2.to_bits() as u64) << 32) | j as u64
+fn key(id: u32, d2: f32) -> u64 {
+    ((d2.to_bits() as u64) << 32) | id as u64
 }
 
 /// The k-th smallest key of `found`'s entries strictly within `r2` (more than k of
 /// them; any order): the k smallest so far, and the largest of those, replaced while a
-/// nearer one comes (a selection over all of them cost zonal's rebuilds more).
-fn kth_key(found: &[(u32, f32)], r2: f32) -> u64 {
+/// nearer one comes (a selection over all of them cost zonal's rebuilds more). `ids`:
+/// every agent's id by index.
+fn kth_key(found: &[(u32, f32)], r2: f32, ids: &[u32]) -> u64 {
     let mut best = [u64::MAX; MAX_NEIGHBOURS];
     let (mut n, mut worst, mut at) = (0, u64::MAX, 0);
     for &(j, d2) in found {
         if d2 >= r2 {
             continue;
         }
-        let k = key(j, d2);
+        let k = key(ids[j as usize], d2);
         if n < MAX_NEIGHBOURS {
             best[n] = k;
             n += 1;
@@ -95,11 +97,11 @@ fn kth_key(found: &[(u32, f32)], r2: f32) -> u64 {
 }
 
 /// Lists into `list` the (at most) `MAX_NEIGHBOURS` of `found` (indices with squared
-/// distances, in increasing index order) nearest strictly within `radius`, ties broken by
-/// index, in `found`'s order; returns the k-th nearest distance (`radius` if fewer than k
+/// distances, in increasing id order) nearest strictly within `radius`, ties broken by
+/// id, in `found`'s order; returns the k-th nearest distance (`radius` if fewer than k
 /// were within it).
 #[inline(always)]
-fn pick(found: &[(u32, f32)], radius: f32, list: &mut NeighbourList) -> f32 {
+fn pick(found: &[(u32, f32)], radius: f32, ids: &[u32], list: &mut NeighbourList) -> f32 {
     let r2 = radius * radius;
     let mut m = 0;
     let mut far = 0.0f32;
@@ -119,10 +121,10 @@ fn pick(found: &[(u32, f32)], radius: f32, list: &mut NeighbourList) -> f32 {
         far.sqrt()
     } else {
         // More than k within the radius (a denser spot): those up to the k-th key.
-        let kth = kth_key(found, r2);
+        let kth = kth_key(found, r2, ids);
         list.clear();
         for &(j, d2) in found {
-            if d2 < r2 && key(j, d2) <= kth {
+            if d2 < r2 && key(ids[j as usize], d2) <= kth {
                 list.push(j);
             }
         }
@@ -130,27 +132,35 @@ fn pick(found: &[(u32, f32)], radius: f32, list: &mut NeighbourList) -> f32 {
     }
 }
 
-/// A substep after a rebuild: `list` from agent candidates `cands` (in increasing index
+/// A substep after a rebuild: `list` from agent candidates `cands` (in increasing id
 /// order) at their current `positions`, for an agent at `p` of radius `radius`.
 #[inline]
-pub fn reselect(cands: &[u32], positions: &[Vec3], p: Vec3, radius: f32, list: &mut NeighbourList) {
+pub fn reselect(
+    cands: &[u32],
+    positions: &[Vec3],
+    ids: &[u32],
+    p: Vec3,
+    radius: f32,
+    list: &mut NeighbourList,
+) {
     let mut found = [(0u32, 0.0f32); MAX_CANDIDATES];
     for (f, &j) in found.iter_mut().zip(cands) {
         // The grid's arithmetic: (q - p)², summed x, y, z (negation is exact).
         *f = (j, p.distance_squared(positions[j as usize]));
     }
-    pick(&found[..cands.len()], radius, list);
+    pick(&found[..cands.len()], radius, ids, list);
 }
 
-/// A rebuild (the grid built over `positions`): lists agent `me`'s neighbours (at `p`,
-/// radius `radius`) into `list` and appends its candidates for skin `sigma` to `out`, in
-/// increasing index order; false if it has more than [`MAX_CANDIDATES`] (nothing
+/// A rebuild (the grid built over `positions`; `ids`: every agent's id by index): lists
+/// agent `me`'s neighbours (at `p`, radius `radius`) into `list` and appends its
+/// candidates for skin `sigma` to `out`, in increasing id order; false if it has more than [`MAX_CANDIDATES`] (nothing
 /// appended: it is queried afresh). `scratch` holds [`SCRATCH`] entries (its contents are
 /// not read).
 #[allow(clippy::too_many_arguments)]
 pub fn build(
     grid: &Grid,
     positions: &[Vec3],
+    ids: &[u32],
     p: Vec3,
     me: usize,
     radius: f32,
@@ -178,7 +188,7 @@ pub fn build(
                 .filter(|f| f.1 < r2)
                 .fold(0.0f32, |a, f| a.max(f.1))
                 .sqrt(),
-            _ => f32::from_bits((kth_key(found, r2) >> 32) as u32).sqrt(),
+            _ => f32::from_bits((kth_key(found, r2, ids) >> 32) as u32).sqrt(),
         };
         let l = limit(radius, kth, sigma);
         let l2 = l * l;
@@ -192,14 +202,14 @@ pub fn build(
         }
         if kept > MAX_CANDIDATES {
             // Too many to keep: the list alone, from everything found.
-            found.sort_unstable_by_key(|f| f.0);
-            pick(found, radius, list);
+            found.sort_unstable_by_key(|f| ids[f.0 as usize]);
+            pick(found, radius, ids, list);
             return false;
         }
         &mut found[..kept]
     } else {
         list.fill(grid, p, radius, me);
-        list.sort();
+        list.sort(ids);
         let n = list.indices().len();
         let kth = if n == MAX_NEIGHBOURS {
             list.indices()
@@ -220,17 +230,17 @@ pub fn build(
             None => return false,
         }
     };
-    // Insertion sort by index: a few dozen at most.
+    // Insertion sort by id: a few dozen at most.
     for i in 1..found.len() {
         let v = found[i];
         let mut j = i;
-        while j > 0 && found[j - 1].0 > v.0 {
+        while j > 0 && ids[found[j - 1].0 as usize] > ids[v.0 as usize] {
             found[j] = found[j - 1];
             j -= 1;
         }
         found[j] = v;
     }
-    pick(found, radius, list);
+    pick(found, radius, ids, list);
     out.extend(found.iter().map(|f| f.0));
     true
 }
@@ -242,13 +252,13 @@ mod tests {
 
     use crate::math::random_cloud as cloud;
 
-    /// The set of agent `i`'s neighbours the grid finds afresh.
-    fn fresh(pts: &[Vec3], i: usize, radius: f32) -> (Vec<u32>, bool) {
+    /// The set of agent `i`'s neighbours the grid finds afresh, in id order.
+    fn fresh(pts: &[Vec3], ids: &[u32], i: usize, radius: f32) -> (Vec<u32>, bool) {
         let mut g = Grid::default();
         g.build(pts, radius);
         let mut list = NeighbourList::default();
         list.fill(&g, pts[i], radius, i);
-        list.sort();
+        list.sort(ids);
         // A tie at the k-th distance: either choice is right.
         let r2 = radius * radius;
         let mut d: Vec<f32> = (0..pts.len())
@@ -265,7 +275,8 @@ mod tests {
     fn lists_picked_from_candidates_equal_fresh_ones_while_agents_stay_within_the_skin() {
         // A sparse cloud (fewer than k within R), a denser one (k within R) and a crowd
         // (most agents keep no candidates); every agent moves randomly, in total at most
-        // σ/2 from where the candidates were kept.
+        // σ/2 from where the candidates were kept. Ids run against the indices (as for
+        // agents stored in cell order), so that ordering by index would fail.
         let mut rng = Rng::new(7, 1, 2);
         for (n, half, radius, sigma) in [
             (1500, 1.0, 0.2, 0.04),
@@ -273,6 +284,7 @@ mod tests {
             (3000, 0.1, 0.15, 0.01),
         ] {
             let mut pts = cloud(&mut rng, n, half);
+            let ids: Vec<u32> = (0..n as u32).rev().collect();
             let mut g = Grid::default();
             g.build(&pts, radius);
             let mut out = Vec::new();
@@ -285,6 +297,7 @@ mod tests {
                 let ok = build(
                     &g,
                     &pts,
+                    &ids,
                     pts[i],
                     i,
                     radius,
@@ -295,7 +308,7 @@ mod tests {
                 );
                 ranges.push(ok.then_some(before..out.len()));
                 kept += ok as usize;
-                let (want, tie) = fresh(&pts, i, radius);
+                let (want, tie) = fresh(&pts, &ids, i, radius);
                 if !tie {
                     assert_eq!(list.indices(), &want[..], "rebuild, agent {i}");
                 }
@@ -311,8 +324,8 @@ mod tests {
                 for i in 0..n {
                     let Some(r) = ranges[i].clone() else { continue };
                     let mut list = NeighbourList::default();
-                    reselect(&out[r], &pts, pts[i], radius, &mut list);
-                    let (want, tie) = fresh(&pts, i, radius);
+                    reselect(&out[r], &pts, &ids, pts[i], radius, &mut list);
+                    let (want, tie) = fresh(&pts, &ids, i, radius);
                     if !tie {
                         assert_eq!(
                             list.indices(),

@@ -16,7 +16,7 @@ pub mod repulsion;
 pub use params::BeeParams;
 
 use super::context::{Context, Neighbour, TargetNow};
-use super::flight::{self, Avoidance, Cruiser, Flight, lag_blend};
+use super::flight::{Avoidance, Cruiser, Flight, lag_blend};
 use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup, vision};
 use crate::field::CurlNoise;
 use crate::math::{self, Rng, normalize_or};
@@ -305,7 +305,7 @@ impl Model for BeeModel {
             let o = &agents[j];
             let (r, dist) = (pos - pj, d2.sqrt());
             let contact = ri + o.radius;
-            let fallback = || flight::separation_fallback(i, j);
+            let fallback = || cx.separation_fallback(i, j);
             let rho_j = if o.density > 0.0 { o.density } else { density };
             a_rep += repulsion::pressure_term(
                 kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j, fallback,

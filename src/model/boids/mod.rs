@@ -2,7 +2,7 @@
 //! Fig. 9 and paper 002 in its evaluation.
 
 use super::context::Context;
-use super::flight::{self, Flight, Flyer};
+use super::flight::{Flight, Flyer};
 use super::params::DEFAULTS_ONLY;
 use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::math::Rng;
@@ -110,11 +110,11 @@ impl Model for BoidsModel {
                 hood.separation += if dist > 1e-6 {
                     r / (dist * dist)
                 } else {
-                    flight::separation_fallback(i, j) * 1e3
+                    cx.separation_fallback(i, j) * 1e3
                 };
             }
             a_col += self.flight.contact(
-                || flight::separation_fallback(i, j),
+                || cx.separation_fallback(i, j),
                 ri + o.radius,
                 r,
                 dist,

@@ -140,11 +140,17 @@ impl Model for FastswarmModel {
         self.p.d_rep as f32
     }
 
-    /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them).
+    /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them), by
+    /// id: the order of Eq. 6's sum, and who counts in a crowd past its limit, must not
+    /// depend on where the world stores the agents.
     fn prepare(&mut self, cx: &Context) {
         let cell = (self.p.d_att2 as f32).max(1e-4);
         self.positions.clear();
-        self.positions.extend(cx.agents.iter().map(|a| a.pos));
+        self.positions.extend(
+            cx.indices_by_id()
+                .iter()
+                .map(|&k| cx.agents[k as usize].pos),
+        );
         self.cells.build(&self.positions, cell);
     }
 
@@ -217,7 +223,7 @@ impl Model for FastswarmModel {
         // more, the first MAX_GATHER found (the sum is an average).
         let mut att = Attraction::new(self.rho, d_att1, pos);
         if w_oa > 0.0 {
-            att.gather(&self.cells, i, d_att1, d_att2, MAX_GATHER);
+            att.gather(&self.cells, cx.id(i), d_att1, d_att2, MAX_GATHER);
         }
         e.attraction_sums(w_oa, &att);
         if let Some(c) = self.center {

@@ -9,7 +9,6 @@
 //! a fixed order, so the result does not depend on threads.
 
 use crate::model::context::Context;
-use crate::model::flight::separation_fallback;
 use glam::Vec3;
 
 /// Agent `i`'s position `q` after its move, pushed away from every neighbour predicted
@@ -29,7 +28,7 @@ pub fn enforce(cx: &Context, i: usize, q: Vec3, dt: f32, d_min: f32, ri: f32) ->
             let away = if dist > 1e-7 {
                 delta / dist
             } else {
-                separation_fallback(i, j)
+                cx.separation_fallback(i, j)
             };
             push += away * (0.5 * (d_min - dist));
             pushed = true;

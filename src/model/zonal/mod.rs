@@ -213,7 +213,7 @@ impl Model for ZonalModel {
                         ri + o.radius,
                         times,
                         0.5,
-                        flight::separation_fallback(i, j),
+                        cx.separation_fallback(i, j),
                     ));
                 }
             },
