@@ -41,6 +41,9 @@ struct Runner<M: Model> {
     start: usize,
     /// Recording buffer, reused every frame: channel values agent by agent.
     values: Vec<f32>,
+    /// Set by `permute`, until the step: where each agent of the new order is stored
+    /// (global indices; empty: in place).
+    moved: Vec<u32>,
     /// Neighbour candidates kept at the last rebuild (`super::skin`), agent after agent,
     /// and each agent's range of them (by agent; `NO_CANDIDATES`: queried afresh every
     /// substep).
@@ -91,9 +94,13 @@ struct Gather<'a> {
 /// What the world does with a swarm, whatever its model: one call per swarm per pass.
 trait Swarm: Send + Sync {
     fn len(&self) -> usize;
-    /// Writes the agents' neighbour records, and which agents are out of the world for
-    /// now (`Agent::hidden`: no one's neighbour) (pass 0).
-    fn neighbour_records(&self, out: &mut [Neighbour], hidden: &mut [bool], mass: f32, radius: f32);
+    /// Writes the agents' neighbour records (pass 0, after a new order's `permute`).
+    fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32);
+    /// Writes every agent's position, and whether it is out of the world for now
+    /// (`Agent::hidden`: no one's neighbour).
+    fn positions(&self, out: &mut [Vec3], hidden: &mut [bool]);
+    /// The largest squared speed of any agent, m²/s².
+    fn fastest(&self) -> f32;
     /// Lists each agent's neighbours and runs the model's gather pass (pass 1); true if
     /// some agent keeps no candidates (so needs a fresh grid every substep).
     fn gather(
@@ -105,7 +112,8 @@ trait Swarm: Send + Sync {
     /// Steps every agent into the second buffer and swaps (pass 2).
     fn step(&mut self, cx: &Context, cancel: &AtomicBool);
     /// Moves the agents to their new indices: the one at global index `old_of_new[k]` to
-    /// `start + k`, for this swarm's k (`Simulation::store_in_cell_order`).
+    /// `start + k`, for this swarm's k (`Simulation::store_in_cell_order`). The move is
+    /// made by this substep's step, which must follow.
     fn permute(&mut self, old_of_new: &[u32]);
     fn reach(&self) -> f32;
     fn lists_neighbours(&self) -> bool;
@@ -125,6 +133,20 @@ trait Swarm: Send + Sync {
     fn set_agent_bytes(&mut self, bytes: &[u8]) -> bool;
 }
 
+impl<M: Model> Runner<M> {
+    /// The agent that goes to (swarm) index k: stored there, or, after a new order
+    /// (`Swarm::permute`) until the step that moves it, at `moved[k]`. The records and the
+    /// step read every agent anyway, so the move costs no pass of its own.
+    #[inline(always)]
+    fn old(&self, k: usize) -> &M::Agent {
+        if self.moved.is_empty() {
+            &self.agents[k]
+        } else {
+            &self.agents[self.moved[k] as usize - self.start]
+        }
+    }
+}
+
 impl<M: Model> Swarm for Runner<M>
 where
     M::Agent: AgentBytes,
@@ -133,22 +155,12 @@ where
         self.agents.len()
     }
 
-    fn neighbour_records(
-        &self,
-        out: &mut [Neighbour],
-        hidden: &mut [bool],
-        mass: f32,
-        radius: f32,
-    ) {
-        hidden
-            .par_iter_mut()
-            .zip(self.agents.par_iter())
-            .with_min_len(4096)
-            .for_each(|(h, a)| *h = a.hidden());
+    fn neighbour_records(&self, out: &mut [Neighbour], mass: f32, radius: f32) {
         out.par_iter_mut()
-            .zip(self.agents.par_iter())
+            .enumerate()
             .with_min_len(1024)
-            .for_each(|(o, a)| {
+            .for_each(|(k, o)| {
+                let a = self.old(k);
                 *o = Neighbour {
                     pos: a.position(),
                     radius: radius * a.size(),
@@ -158,6 +170,23 @@ where
                     pressure: 0.0,
                 };
             });
+    }
+
+    fn positions(&self, out: &mut [Vec3], hidden: &mut [bool]) {
+        debug_assert!(self.moved.is_empty(), "a new order waits for its step");
+        out.par_iter_mut()
+            .zip(hidden.par_iter_mut())
+            .zip(self.agents.par_iter())
+            .with_min_len(1024)
+            .for_each(|((p, h), a)| (*p, *h) = (a.position(), a.hidden()));
+    }
+
+    fn fastest(&self) -> f32 {
+        self.agents
+            .par_iter()
+            .with_min_len(4096)
+            .map(|a| a.velocity().length_squared())
+            .reduce(|| 0.0, f32::max)
     }
 
     fn gather(
@@ -297,15 +326,15 @@ where
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
         self.model.prepare(cx);
-        let m = &self.model;
-        let (agents, start) = (&self.agents, self.start);
-        self.next.clear();
-        self.next.par_extend(
-            agents
-                .par_iter()
-                .enumerate()
+        let (m, start) = (&self.model, self.start);
+        let mut next = std::mem::take(&mut self.next);
+        next.clear();
+        next.par_extend(
+            (0..self.agents.len())
+                .into_par_iter()
                 .with_min_len(128)
-                .map(|(k, a)| {
+                .map(|k| {
+                    let a = self.old(k);
                     // Cancelled: agents are copied, not stepped (the state is abandoned).
                     if cancel.load(Ordering::Relaxed) {
                         *a
@@ -314,19 +343,13 @@ where
                     }
                 }),
         );
-        std::mem::swap(&mut self.agents, &mut self.next);
+        self.next = std::mem::replace(&mut self.agents, next);
+        self.moved.clear();
     }
 
     fn permute(&mut self, old_of_new: &[u32]) {
-        let (agents, start) = (&self.agents, self.start);
-        self.next.clear();
-        self.next.par_extend(
-            old_of_new
-                .par_iter()
-                .with_min_len(1024)
-                .map(|&o| agents[o as usize - start]),
-        );
-        std::mem::swap(&mut self.agents, &mut self.next);
+        debug_assert!(self.moved.is_empty());
+        self.moved.extend_from_slice(old_of_new);
     }
 
     fn reach(&self) -> f32 {
@@ -346,10 +369,12 @@ where
     }
 
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3) {
+        debug_assert!(self.moved.is_empty(), "a new order waits for its step");
         self.agents[k].place(position, velocity);
     }
 
     fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32, slots: &[u32]) {
+        debug_assert!(self.moved.is_empty(), "a new order waits for its step");
         let n = self.agents.len();
         let channels = M::INFO.channels.len();
         let (m, agents, start) = (&self.model, &self.agents, self.start);
@@ -407,6 +432,7 @@ where
     }
 
     fn agent_bytes(&self, out: &mut Vec<u8>, slots: &[u32]) {
+        debug_assert!(self.moved.is_empty(), "a new order waits for its step");
         let by_id: Vec<M::Agent> = slots
             .iter()
             .map(|&i| self.agents[i as usize - self.start])
@@ -446,7 +472,6 @@ pub struct Simulation {
     /// Buffers of `store_in_cell_order`, reused every substep.
     new_of_old: Vec<u32>,
     old_of_new: Vec<u32>,
-    spare_records: Vec<Neighbour>,
     spare_positions: Vec<Vec3>,
     spare_flags: Vec<bool>,
     spare_ids: Vec<u32>,
@@ -645,6 +670,7 @@ impl Simulation {
                     agents,
                     start: first,
                     values: Vec::new(),
+                    moved: Vec::new(),
                     candidates: Vec::new(),
                     ranges: Vec::new(),
                 })
@@ -708,7 +734,6 @@ impl Simulation {
             slots: Vec::new(),
             new_of_old: Vec::new(),
             old_of_new: Vec::new(),
-            spare_records: Vec::new(),
             spare_positions: Vec::new(),
             spare_flags: Vec::new(),
             spare_ids: Vec::new(),
@@ -886,28 +911,21 @@ impl Simulation {
         // obstacles at that frame), so the contact guard pushes out a body a moving
         // obstacle has come onto.
         self.update_obstacles(t, self.shot.dt());
-        // Pass 0: every agent's neighbour record, and the grid over their positions.
-        self.agents.resize(n, Neighbour::default());
-        self.hidden.resize(n, false);
-        let per_swarm =
-            split(&mut self.agents, &self.swarms).zip(split(&mut self.hidden, &self.swarms));
-        for (s, (swarm, (rest, hidden))) in self
-            .shot
-            .swarms
-            .iter()
-            .zip(self.swarms.iter().zip(per_swarm))
-        {
-            swarm.neighbour_records(rest, hidden, s.bee.mass, s.bee.radius);
-        }
-        // The grid only for shots where some model reads neighbours; hidden agents (bees
-        // inside their hive) are not in it, so no one meets them.
+        // Pass 0: the grid over the agents' positions, then every agent's neighbour
+        // record, in the grid's order. The grid only for shots where some model reads
+        // neighbours; hidden agents (bees inside their hive) are not in it, so no one
+        // meets them.
         let lists = self.swarms.iter().any(|s| s.lists_neighbours());
         let mut listing = Listing::Fresh;
         let mut regrid = lists;
         if lists {
-            self.positions.clear();
-            self.positions
-                .par_extend(self.agents.par_iter().map(|a| a.pos));
+            self.positions.resize(n, Vec3::ZERO);
+            self.hidden.resize(n, false);
+            let per_swarm =
+                split(&mut self.positions, &self.swarms).zip(split(&mut self.hidden, &self.swarms));
+            for (swarm, (positions, hidden)) in self.swarms.iter().zip(per_swarm) {
+                swarm.positions(positions, hidden);
+            }
             listing = self.listing(substep);
             regrid = listing != Listing::Reuse || self.needs_grid;
         }
@@ -926,6 +944,14 @@ impl Simulation {
             if listing != Listing::Reuse {
                 self.store_in_cell_order();
             }
+        }
+        self.agents.resize(n, Neighbour::default());
+        for (s, (swarm, records)) in self.shot.swarms.iter().zip(
+            self.swarms
+                .iter()
+                .zip(split(&mut self.agents, &self.swarms)),
+        ) {
+            swarm.neighbour_records(records, s.bee.mass, s.bee.radius);
         }
 
         // Pass 1: neighbour lists and the models' gather passes, written in place.
@@ -1027,7 +1053,6 @@ impl Simulation {
             self.old_of_new[k as usize] = o as u32;
         }
         let old_of_new = &self.old_of_new;
-        permute(&mut self.agents, old_of_new, &mut self.spare_records);
         permute(&mut self.positions, old_of_new, &mut self.spare_positions);
         permute(&mut self.hidden, old_of_new, &mut self.spare_flags);
         permute(&mut self.ids, old_of_new, &mut self.spare_ids);
@@ -1116,11 +1141,10 @@ impl Simulation {
             return 0.0;
         }
         let fastest = self
-            .agents
-            .par_iter()
-            .with_min_len(4096)
-            .map(|a| a.vel.length_squared())
-            .reduce(|| 0.0, f32::max)
+            .swarms
+            .iter()
+            .map(|s| s.fastest())
+            .fold(0.0, f32::max)
             .sqrt();
         let most = self.skin_fraction * self.grid_cell;
         let mut step = fastest * self.shot.dt() as f32;
