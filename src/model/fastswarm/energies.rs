@@ -5,7 +5,7 @@
 //! a velocity has no direction).
 
 use super::database::{LANES, Soa, turn};
-use super::neighbours::CellIndex;
+use super::neighbours::{Batch, CellIndex};
 use crate::math::normalize_or;
 use crate::model::context::MAX_NEIGHBOURS;
 use glam::{Mat3, Vec3};
@@ -158,7 +158,7 @@ impl Attraction {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
         }
-        self.gather_batches::<false, 8>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<false, false, 8>(cells, exclude, r1, r2, limit);
     }
 
     /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
@@ -167,7 +167,7 @@ impl Attraction {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, 8>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, false, 8>(cells, exclude, r1, r2, limit);
     }
 
     /// [`Self::gather_batches`] compiled for AVX-512, summing 16 neighbours at once (one
@@ -175,7 +175,7 @@ impl Attraction {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, 16>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, true, 16>(cells, exclude, r1, r2, limit);
     }
 
     /// In two passes: the scan collects the neighbours' positions in a buffer, then their
@@ -183,7 +183,7 @@ impl Attraction {
     /// chained each group's arithmetic to the scan's scattered stores; apart, the sums'
     /// loop has no dependence but the sums themselves.
     #[inline(always)]
-    fn gather_batches<const WIDE: bool, const N: usize>(
+    fn gather_batches<const WIDE: bool, const COMPRESS: bool, const N: usize>(
         &mut self,
         cells: &CellIndex,
         exclude: usize,
@@ -210,6 +210,14 @@ impl Attraction {
             let room = limit - n;
             while hits.count_ones() as usize > room {
                 hits &= !(1 << (31 - hits.leading_zeros()));
+            }
+            #[cfg(target_arch = "x86_64")]
+            if COMPRESS {
+                // SAFETY: COMPRESS is set only under gather_avx512, run once AVX-512 F and
+                // VL were detected; n ≤ limit, so the 8 slots from n are in the buffer.
+                unsafe { append_compressed(&mut buf, n, &b, hits) };
+                n += hits.count_ones() as usize;
+                return;
             }
             // Every lane is written and the count advanced by its bit: no branch per hit
             // (whether a scanned agent is in the zone is unpredictable). n ≤ limit, so
@@ -314,6 +322,32 @@ impl Attraction {
             for (sum, row) in self.sums.iter_mut().zip(&t) {
                 *sum += row[l];
             }
+        }
+    }
+}
+
+/// Writes the hits of `b` (bit l of `hits` for lane l) to `buf` from slot `n`, in lane
+/// order, by one compress per component (in a register: AVX-512's compress to memory is
+/// slow on some CPUs) and one 8-lane store, where the portable loop stores every lane.
+/// The slots past the hits get zeros; the caller advances `n` by the hits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
+#[inline]
+unsafe fn append_compressed(
+    buf: &mut [[MaybeUninit<f32>; MAX_GATHER + MAX_GROUP]; 3],
+    n: usize,
+    b: &Batch<'_>,
+    hits: u32,
+) {
+    use std::arch::x86_64::*;
+    let k = hits as __mmask8;
+    for (out, lanes) in buf.iter_mut().zip([b.x, b.y, b.z]) {
+        let slots = &mut out[n..n + ATT_LANES];
+        // SAFETY: `lanes` holds 8 floats and `slots` 8 (MaybeUninit<f32> is laid out as
+        // f32); unaligned load and store.
+        unsafe {
+            let v = _mm256_maskz_compress_ps(k, _mm256_loadu_ps(lanes.as_ptr()));
+            _mm256_storeu_ps(slots.as_mut_ptr().cast::<f32>(), v);
         }
     }
 }
@@ -848,7 +882,7 @@ mod tests {
                 );
                 // Every build, whichever `gather` picked on this CPU.
                 let mut portable = Attraction::new(rho, d1, p);
-                portable.gather_batches::<false, 8>(&cells, i, r1, d2, limit);
+                portable.gather_batches::<false, false, 8>(&cells, i, r1, d2, limit);
                 assert_eq!(
                     bits(&one),
                     bits(&portable),
