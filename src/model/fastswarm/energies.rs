@@ -85,9 +85,10 @@ const M: usize = 5;
 /// Terms per neighbour.
 const TERMS: usize = 11;
 
-/// The most neighbours [`Attraction::gather`] sums at once: 16 in the AVX-512 build (one
-/// register per quantity), 8 in the others (16 there measured slower).
-const MAX_GROUP: usize = 16;
+/// The most neighbours [`Attraction::gather`] sums at once: 32 in the AVX-512 build (two
+/// registers per quantity: two independent chains of roots, divisions and exponentials
+/// in flight; 16 and 48 measured slower), 8 in the others (16 there measured slower).
+const MAX_GROUP: usize = 32;
 
 /// The most neighbours [`Attraction::gather`] takes: a whole 500-agent shape fits, and a
 /// bound keeps the step's cost bounded.
@@ -170,12 +171,12 @@ impl Attraction {
         self.gather_batches::<true, false, 8>(cells, exclude, r1, r2, limit);
     }
 
-    /// [`Self::gather_batches`] compiled for AVX-512, summing 16 neighbours at once (one
-    /// register per quantity): the same additions in the same order, so the same bits.
+    /// [`Self::gather_batches`] compiled for AVX-512, summing 32 neighbours at once (two
+    /// registers per quantity): the same additions in the same order, so the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, true, 16>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, true, 32>(cells, exclude, r1, r2, limit);
     }
 
     /// In two passes: the scan collects the neighbours' positions in a buffer, then their
