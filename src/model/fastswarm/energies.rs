@@ -5,10 +5,11 @@
 //! a velocity has no direction).
 
 use super::database::{LANES, Soa, turn};
-use super::neighbours::CellIndex;
+use super::neighbours::{Batch, CellIndex};
 use crate::math::normalize_or;
 use crate::model::context::MAX_NEIGHBOURS;
 use glam::{Mat3, Vec3};
+use std::mem::MaybeUninit;
 
 /// e^x for the energies: 2^(x log₂e) from the exponent bits and a degree-6 polynomial for
 /// the fraction, within 1e-5 of `f32::exp` relative on [−87, 87] (clamped beyond). Plain
@@ -84,9 +85,10 @@ const M: usize = 5;
 /// Terms per neighbour.
 const TERMS: usize = 11;
 
-/// The most neighbours [`Attraction::gather`] sums at once: 16 in the AVX-512 build (one
-/// register per quantity), 8 in the others (16 there measured slower).
-const MAX_GROUP: usize = 16;
+/// The most neighbours [`Attraction::gather`] sums at once: 32 in the AVX-512 build (two
+/// registers per quantity: two independent chains of roots, divisions and exponentials
+/// in flight; 16 and 48 measured slower), 8 in the others (16 there measured slower).
+const MAX_GROUP: usize = 32;
 
 /// The most neighbours [`Attraction::gather`] takes: a whole 500-agent shape fits, and a
 /// bound keeps the step's cost bounded.
@@ -157,7 +159,7 @@ impl Attraction {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
         }
-        self.gather_batches::<false, 8>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<false, false, 8>(cells, exclude, r1, r2, limit);
     }
 
     /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
@@ -166,15 +168,15 @@ impl Attraction {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, 8>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, false, 8>(cells, exclude, r1, r2, limit);
     }
 
-    /// [`Self::gather_batches`] compiled for AVX-512, summing 16 neighbours at once (one
-    /// register per quantity): the same additions in the same order, so the same bits.
+    /// [`Self::gather_batches`] compiled for AVX-512, summing 32 neighbours at once (two
+    /// registers per quantity): the same additions in the same order, so the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, 16>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<true, true, 32>(cells, exclude, r1, r2, limit);
     }
 
     /// In two passes: the scan collects the neighbours' positions in a buffer, then their
@@ -182,7 +184,7 @@ impl Attraction {
     /// chained each group's arithmetic to the scan's scattered stores; apart, the sums'
     /// loop has no dependence but the sums themselves.
     #[inline(always)]
-    fn gather_batches<const WIDE: bool, const N: usize>(
+    fn gather_batches<const WIDE: bool, const COMPRESS: bool, const N: usize>(
         &mut self,
         cells: &CellIndex,
         exclude: usize,
@@ -192,7 +194,9 @@ impl Attraction {
     ) {
         debug_assert_eq!(self.n, 0, "gathers into empty sums");
         let limit = limit.min(MAX_GATHER);
-        let mut buf = [[0.0f32; MAX_GATHER + MAX_GROUP]; 3];
+        // Left uninitialised: zeroing 6 kB per agent was 2 % of the step. Every slot read
+        // below is written first (see `filled`).
+        let mut buf = [[MaybeUninit::<f32>::uninit(); MAX_GATHER + MAX_GROUP]; 3];
         let mut n = 0;
         // The agent itself, at distance 0, is in the shell only when r1² is 0 (the test
         // of every lane's index against it was 3 % of the step).
@@ -208,16 +212,38 @@ impl Attraction {
             while hits.count_ones() as usize > room {
                 hits &= !(1 << (31 - hits.leading_zeros()));
             }
+            #[cfg(target_arch = "x86_64")]
+            if COMPRESS {
+                // SAFETY: COMPRESS is set only under gather_avx512, run once AVX-512 F and
+                // VL were detected; n ≤ limit, so the 8 slots from n are in the buffer.
+                unsafe { append_compressed(&mut buf, n, &b, hits) };
+                n += hits.count_ones() as usize;
+                return;
+            }
             // Every lane is written and the count advanced by its bit: no branch per hit
             // (whether a scanned agent is in the zone is unpredictable). n ≤ limit, so
             // n + l < MAX_GATHER + ATT_LANES.
             for l in 0..ATT_LANES {
-                buf[0][n] = b.x[l];
-                buf[1][n] = b.y[l];
-                buf[2][n] = b.z[l];
+                buf[0][n].write(b.x[l]);
+                buf[1][n].write(b.y[l]);
+                buf[2][n].write(b.z[l]);
                 n += ((hits >> l) & 1) as usize;
             }
         });
+        // The last group reads up to N slots past the n found (lanes it then leaves out).
+        for a in &mut buf {
+            for slot in &mut a[n..n + N] {
+                slot.write(0.0);
+            }
+        }
+        // Slots 0..n were each written when the count reached them, n..n + N just above.
+        let filled = |a: &[MaybeUninit<f32>; MAX_GATHER + MAX_GROUP]| -> &[f32] {
+            let a = &a[..n + N];
+            // SAFETY: every slot of `a` is initialised (above), and MaybeUninit<f32> has
+            // f32's layout.
+            unsafe { &*(a as *const [MaybeUninit<f32>] as *const [f32]) }
+        };
+        let buf = [filled(&buf[0]), filled(&buf[1]), filled(&buf[2])];
         for start in (0..n).step_by(N) {
             let lanes = |a: &[f32]| -> [f32; N] {
                 a[start..start + N]
@@ -225,7 +251,7 @@ impl Attraction {
                     .expect("room for a whole group")
             };
             let count = (n - start).min(N);
-            self.sum_lanes::<WIDE, N>(&lanes(&buf[0]), &lanes(&buf[1]), &lanes(&buf[2]), count);
+            self.sum_lanes::<WIDE, N>(&lanes(buf[0]), &lanes(buf[1]), &lanes(buf[2]), count);
         }
         self.n = n;
     }
@@ -260,7 +286,9 @@ impl Attraction {
         let (p, k) = (self.p, self.k);
         // Per neighbour, as one would write it for a single one:
         // r = p − q, d = ‖r‖, u = r/d, f = e^{ρ(d/d_att1 − 1)}, c = f (k² − k/d).
-        let mut t = [[0.0f32; N]; TERMS];
+        // Left uninitialised (every entry is written just below): zeroed, it was a call to
+        // memset of 1.4 kB per group of 32, with the registers saved around it.
+        let mut t = [[MaybeUninit::<f32>::uninit(); N]; TERMS];
         for l in 0..N {
             let (rx, ry, rz) = (p.x - qx[l], p.y - qy[l], p.z - qz[l]);
             let d = (rx * rx + ry * ry + rz * rz).sqrt().max(1e-6);
@@ -269,18 +297,21 @@ impl Attraction {
             let fj = fast_exp(self.rho * (d * self.inv_d1 - 1.0));
             let fk = fj * k;
             let c = fj * (k * k - k * inv);
-            t[0][l] = fj;
-            t[1][l] = ux * fk;
-            t[2][l] = uy * fk;
-            t[3][l] = uz * fk;
-            t[4][l] = fk * inv;
-            t[5][l] = c * ux * ux;
-            t[6][l] = c * uy * uy;
-            t[7][l] = c * uz * uz;
-            t[8][l] = c * ux * uy;
-            t[9][l] = c * ux * uz;
-            t[10][l] = c * uy * uz;
+            t[0][l].write(fj);
+            t[1][l].write(ux * fk);
+            t[2][l].write(uy * fk);
+            t[3][l].write(uz * fk);
+            t[4][l].write(fk * inv);
+            t[5][l].write(c * ux * ux);
+            t[6][l].write(c * uy * uy);
+            t[7][l].write(c * uz * uz);
+            t[8][l].write(c * ux * uy);
+            t[9][l].write(c * ux * uz);
+            t[10][l].write(c * uy * uz);
         }
+        // SAFETY: every entry of every row was written in the loop above, and
+        // MaybeUninit<f32> is laid out as f32.
+        let t: [[f32; N]; TERMS] = unsafe { std::mem::transmute_copy(&t) };
         #[cfg(target_arch = "x86_64")]
         if WIDE && count == N && N.is_multiple_of(ATT_LANES) {
             for h in (0..N).step_by(ATT_LANES) {
@@ -297,6 +328,32 @@ impl Attraction {
             for (sum, row) in self.sums.iter_mut().zip(&t) {
                 *sum += row[l];
             }
+        }
+    }
+}
+
+/// Writes the hits of `b` (bit l of `hits` for lane l) to `buf` from slot `n`, in lane
+/// order, by one compress per component (in a register: AVX-512's compress to memory is
+/// slow on some CPUs) and one 8-lane store, where the portable loop stores every lane.
+/// The slots past the hits get zeros; the caller advances `n` by the hits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
+#[inline]
+unsafe fn append_compressed(
+    buf: &mut [[MaybeUninit<f32>; MAX_GATHER + MAX_GROUP]; 3],
+    n: usize,
+    b: &Batch<'_>,
+    hits: u32,
+) {
+    use std::arch::x86_64::*;
+    let k = hits as __mmask8;
+    for (out, lanes) in buf.iter_mut().zip([b.x, b.y, b.z]) {
+        let slots = &mut out[n..n + ATT_LANES];
+        // SAFETY: `lanes` holds 8 floats and `slots` 8 (MaybeUninit<f32> is laid out as
+        // f32); unaligned load and store.
+        unsafe {
+            let v = _mm256_maskz_compress_ps(k, _mm256_loadu_ps(lanes.as_ptr()));
+            _mm256_storeu_ps(slots.as_mut_ptr().cast::<f32>(), v);
         }
     }
 }
@@ -831,7 +888,7 @@ mod tests {
                 );
                 // Every build, whichever `gather` picked on this CPU.
                 let mut portable = Attraction::new(rho, d1, p);
-                portable.gather_batches::<false, 8>(&cells, i, r1, d2, limit);
+                portable.gather_batches::<false, false, 8>(&cells, i, r1, d2, limit);
                 assert_eq!(
                     bits(&one),
                     bits(&portable),

