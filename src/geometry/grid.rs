@@ -262,7 +262,7 @@ impl Grid {
 
     /// Renames the points: point i becomes point `new_of_old[i]` (a permutation of the
     /// indices), in the same cell and the same place in it. For the world, which moves its
-    /// agents into the grid's order after a build (`crate::sim::world`, "cell order").
+    /// agents into the grid's order after a build (`crate::sim::world`, "Cell order").
     pub fn relabel(&mut self, new_of_old: &[u32]) {
         debug_assert_eq!(new_of_old.len(), self.slot.len());
         let n = self.len();

@@ -3,7 +3,7 @@
 //! Conventions: metres, seconds, world Y-up right-handed. An agent index `i` is where the
 //! agent is stored this substep: global (every swarm's agents one after another, so a model
 //! sees other swarms' agents as neighbours too), but within its swarm in the grid's cell
-//! order, which the world renews as agents move (`crate::sim::world`, "cell order"). An
+//! order, which the world renews as agents move (`crate::sim::world`, "Cell order"). An
 //! agent's identity — its place in the shot's order, which seeds its random numbers and
 //! names it in the caches — is [`Context::id`].
 

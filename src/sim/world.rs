@@ -466,7 +466,7 @@ pub struct Simulation {
     /// Per agent: out of the world this substep (`Agent::hidden`), left out of the grid.
     hidden: Vec<bool>,
     positions: Vec<Vec3>,
-    /// Every agent's id by index, and its index by id (see the module notes, "cell order").
+    /// Every agent's id by index, and its index by id (see the module notes, "Cell order").
     ids: Vec<u32>,
     slots: Vec<u32>,
     /// Buffers of `store_in_cell_order`, reused every substep.
