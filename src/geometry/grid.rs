@@ -61,8 +61,10 @@ pub struct Grid {
     starts: Vec<u32>,
     /// Padded past the end by `LANES - 1` entries (u32::MAX), as the position arrays.
     items: Vec<u32>,
-    /// Each point's place in `items` (u32::MAX for points left out).
+    /// Each point's place in `items` (u32::MAX for points left out), and a buffer for
+    /// `relabel`.
     slot: Vec<u32>,
+    spare: Vec<u32>,
     /// Positions in `items` order, one array per axis, so candidate tests read
     /// contiguous memory.
     xs: Vec<f32>,
@@ -95,6 +97,11 @@ impl Grid {
     /// share the rows they read.
     pub fn order(&self) -> &[u32] {
         &self.items[..self.len()]
+    }
+
+    /// Each point's place in [`Grid::order`] (`u32::MAX` for points left out).
+    pub fn places(&self) -> &[u32] {
+        &self.slot
     }
 
     /// Number of points in the grid (those not left out).
@@ -261,19 +268,27 @@ impl Grid {
     }
 
     /// Renames the points: point i becomes point `new_of_old[i]` (a permutation of the
-    /// indices), in the same cell and the same place in it. For the world, which moves its
-    /// agents into the grid's order after a build (`crate::sim::world`, "Cell order").
-    pub fn relabel(&mut self, new_of_old: &[u32]) {
+    /// indices, `old_of_new` its inverse), in the same cell and the same place in it. For
+    /// the world, which moves its agents into the grid's order after a build
+    /// (`crate::sim::world`, "Cell order"). Two gathers, in parallel.
+    pub fn relabel(&mut self, new_of_old: &[u32], old_of_new: &[u32]) {
         debug_assert_eq!(new_of_old.len(), self.slot.len());
         let n = self.len();
         self.items[..n]
             .par_iter_mut()
             .with_min_len(4096)
             .for_each(|i| *i = new_of_old[*i as usize]);
-        self.slot.iter_mut().for_each(|s| *s = u32::MAX);
-        for (t, &i) in self.items[..n].iter().enumerate() {
-            self.slot[i as usize] = t as u32;
-        }
+        let old = std::mem::take(&mut self.slot);
+        let mut slot = std::mem::take(&mut self.spare);
+        slot.clear();
+        slot.par_extend(
+            old_of_new
+                .par_iter()
+                .with_min_len(4096)
+                .map(|&o| old[o as usize]),
+        );
+        self.slot = slot;
+        self.spare = old;
     }
 
     /// Writes into `out` the indices of the (at most) `k` points nearest `p` strictly
@@ -787,7 +802,8 @@ mod tests {
             for (t, &i) in g.order().iter().enumerate() {
                 new_of_old[i as usize] = t as u32;
             }
-            g.relabel(&new_of_old);
+            let old_of_new = g.order().to_vec();
+            g.relabel(&new_of_old, &old_of_new);
             let mut moved = vec![Vec3::ZERO; n];
             for (i, p) in pts.iter().enumerate() {
                 moved[new_of_old[i] as usize] = *p;

@@ -977,10 +977,11 @@ impl Simulation {
         if listing != Listing::Reuse {
             self.needs_grid = needs_grid;
         }
-        for (a, &(d, p)) in self.agents.iter_mut().zip(&self.gathered) {
-            a.density = d;
-            a.pressure = p;
-        }
+        self.agents
+            .par_iter_mut()
+            .zip(self.gathered.par_iter())
+            .with_min_len(4096)
+            .for_each(|(a, &(d, p))| (a.density, a.pressure) = (d, p));
 
         // Pass 2: every model's step.
         let cx = Context {
@@ -1021,6 +1022,63 @@ impl Simulation {
                 })
                 .collect()
         };
+        let order = self.grid.order();
+        if ranges.len() == 1 && ranges[0].2 && order.len() == n {
+            // One swarm, all of it in the grid (the common case): the new order is the
+            // grid's, and each agent's new index its place in it. Copies, in parallel.
+            self.new_of_old.clear();
+            self.new_of_old
+                .par_extend(self.grid.places().par_iter().with_min_len(4096));
+            self.old_of_new.clear();
+            self.old_of_new
+                .par_extend(order.par_iter().with_min_len(4096));
+        } else {
+            self.renumber(&ranges);
+        }
+        let (new_of_old, old_of_new) = (&self.new_of_old, &self.old_of_new);
+        // Positions, flags and ids in one pass.
+        self.spare_positions.resize(n, Vec3::ZERO);
+        self.spare_flags.resize(n, false);
+        self.spare_ids.resize(n, 0);
+        let (positions, hidden, ids) = (&self.positions, &self.hidden, &self.ids);
+        self.spare_positions
+            .par_iter_mut()
+            .zip(self.spare_flags.par_iter_mut())
+            .zip(self.spare_ids.par_iter_mut())
+            .zip(old_of_new.par_iter())
+            .with_min_len(4096)
+            .for_each(|(((p, h), i), &o)| {
+                let o = o as usize;
+                (*p, *h, *i) = (positions[o], hidden[o], ids[o]);
+            });
+        std::mem::swap(&mut self.positions, &mut self.spare_positions);
+        std::mem::swap(&mut self.hidden, &mut self.spare_flags);
+        std::mem::swap(&mut self.ids, &mut self.spare_ids);
+        // The skin's copies, when kept (`listing`).
+        if self.built.len() == n {
+            permute(&mut self.built, old_of_new, &mut self.spare_positions);
+            permute(&mut self.built_hidden, old_of_new, &mut self.spare_flags);
+        }
+        if self.previous.len() == n {
+            permute(&mut self.previous, old_of_new, &mut self.spare_positions);
+        }
+        self.slots
+            .par_iter_mut()
+            .with_min_len(4096)
+            .for_each(|k| *k = new_of_old[*k as usize]);
+        self.grid.relabel(new_of_old, old_of_new);
+        for (swarm, &(from, to, permutes)) in self.swarms.iter_mut().zip(&ranges) {
+            if permutes {
+                swarm.permute(&old_of_new[from..to]);
+            }
+        }
+    }
+
+    /// `store_in_cell_order`'s new indices in general (several swarms, or agents left out
+    /// of the grid): each swarm `(from, to, permutes)` that permutes takes its agents in
+    /// the grid's order, then those left out by id; the others keep theirs.
+    fn renumber(&mut self, ranges: &[(usize, usize, bool)]) {
+        let n = self.ids.len();
         let mut next: Vec<u32> = ranges.iter().map(|r| r.0 as u32).collect();
         let new_of_old = &mut self.new_of_old;
         new_of_old.clear();
@@ -1051,27 +1109,6 @@ impl Simulation {
         self.old_of_new.resize(n, 0);
         for (o, &k) in new_of_old.iter().enumerate() {
             self.old_of_new[k as usize] = o as u32;
-        }
-        let old_of_new = &self.old_of_new;
-        permute(&mut self.positions, old_of_new, &mut self.spare_positions);
-        permute(&mut self.hidden, old_of_new, &mut self.spare_flags);
-        permute(&mut self.ids, old_of_new, &mut self.spare_ids);
-        // The skin's copies, when kept (`listing`).
-        if self.built.len() == n {
-            permute(&mut self.built, old_of_new, &mut self.spare_positions);
-            permute(&mut self.built_hidden, old_of_new, &mut self.spare_flags);
-        }
-        if self.previous.len() == n {
-            permute(&mut self.previous, old_of_new, &mut self.spare_positions);
-        }
-        for (k, &id) in self.ids.iter().enumerate() {
-            self.slots[id as usize] = k as u32;
-        }
-        self.grid.relabel(new_of_old);
-        for (swarm, &(from, to, permutes)) in self.swarms.iter_mut().zip(&ranges) {
-            if permutes {
-                swarm.permute(&old_of_new[from..to]);
-            }
         }
     }
 
