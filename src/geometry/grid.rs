@@ -18,7 +18,8 @@
 //! cannot guess, and its misses cost more than the arithmetic), and then keeps the k
 //! nearest, in the order they were collected.
 //!
-//! Agent indices are counting-sorted by cell in increasing index order and the walk is a
+//! Agent indices are counting-sorted by cell, within a cell in the build's visiting order
+//! (increasing index, or the world's ids: `Grid::build_visiting`), and the walk is a
 //! fixed function of the query point and the grid, so the neighbours found — and the order
 //! every floating-point sum visits them in — are the same whatever the number of threads.
 

@@ -220,7 +220,7 @@ pub trait Model: Sized + Send + Sync {
     /// Whether the model has a gather pass (paper 000's SPH density) before the step.
     const GATHERS: bool = false;
     /// Whether the world may reuse this model's neighbour candidates over substeps (`sim::
-    /// skin`). Reused lists come in index order, not the grid's, which changes the last
+    /// skin`). Reused lists come in id order, not the grid's, which changes the last
     /// bits of sums over neighbours; a model opts in once its results were checked with
     /// them (zonal). The bee and boids do not: their caches stay as without candidates,
     /// even where they fly slowly enough to keep some (the mosquito cage).

@@ -492,7 +492,7 @@ pub struct Simulation {
     keeps: bool,
     previous: Vec<Vec3>,
     /// Some substep of this frame kept candidates: every list of the rest of the frame is
-    /// in index order, found afresh or not, so that when the lists are rebuilt (a fast
+    /// in id order, found afresh or not, so that when the lists are rebuilt (a fast
     /// agent) changes no sum. A frame without a skin keeps the grid's order and skips
     /// the sort.
     sorted: bool,
