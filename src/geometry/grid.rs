@@ -591,9 +591,6 @@ fn floor_i32(v: f32) -> i32 {
 /// Candidates a query holds: with more, it keeps the k nearest so far and goes on.
 const COLLECT: usize = 64;
 
-/// Up to this many candidates too many are dropped one at a time (`Scan::keep_nearest`).
-const DROP_ONE_BY_ONE: usize = 12;
-
 /// For each mask of 4 lanes, the lanes set, first to last (the rest 0).
 const PACKED: [[u32; LANES]; 16] = {
     let mut t = [[0; LANES]; 16];
@@ -691,10 +688,12 @@ impl Scan<'_> {
 
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
     /// k-th distance going to the first. Their squared distances are worked out again as
-    /// `collect` does (so the same bits). A few too many (the usual case): the farthest,
-    /// the last of equals, dropped one at a time, four lanes at a time and without a
-    /// branch on the values (a sort's comparisons mispredict); many: the k-th distance by
-    /// selection. Either way one pass then keeps the rest in order.
+    /// `collect` does (so the same bits). Up to `RANKED` candidates (the usual case): each
+    /// one's rank, the number of candidates strictly nearer, counted for four at a time
+    /// against every other, with no branch on the values (a sort's comparisons
+    /// mispredict) and no chain of dependent steps; exactly k ranked below k are the k
+    /// nearest. More, or a tie at the k-th distance (then more than k rank below k): the
+    /// k-th distance by selection. Either way one pass then keeps the rest in order.
     #[inline(never)]
     fn keep_nearest(&self, found: &mut Found) {
         let (n, k) = (found.len, self.k);
@@ -702,30 +701,27 @@ impl Scan<'_> {
             return;
         }
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
-        // −1: no candidate, never the farthest.
-        let mut d2 = [-1.0f32; COLLECT + LANES];
+        // ∞: no candidate, nearer than none.
+        let mut d2 = [f32::INFINITY; COLLECT + LANES];
         for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
             let s = s as usize;
             let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
             *d = dx * dx + dy * dy + dz * dz;
         }
+        let kept = match n.div_ceil(LANES) {
+            5 => ranked_below::<5>(&d2, n, k),
+            6 => ranked_below::<6>(&d2, n, k),
+            7 => ranked_below::<7>(&d2, n, k),
+            8 => ranked_below::<8>(&d2, n, k),
+            g if g < 5 => ranked_below::<4>(&d2, n, k),
+            _ => 0,
+        };
         let mut w = 0;
-        if n - k <= DROP_ONE_BY_ONE {
-            let groups = n.div_ceil(LANES);
-            for _ in k..n {
-                let group = |g: usize| Vec4::from_slice(&d2[g * LANES..]);
-                let far = (0..groups)
-                    .fold(Vec4::splat(-1.0), |m, g| m.max(group(g)))
-                    .max_element();
-                let at = (0..groups).fold(0u64, |m, g| {
-                    m | (group(g).cmpeq(Vec4::splat(far)).bitmask() as u64) << (g * LANES)
-                });
-                d2[(63 - at.leading_zeros()) as usize] = -1.0;
-            }
+        if kept.count_ones() as usize == k {
             // In place: the write position never passes the read position.
-            for (r, &d) in d2[..n].iter().enumerate() {
+            for r in 0..n {
                 found.slots[w] = found.slots[r];
-                w += (d >= 0.0) as usize;
+                w += (kept >> r) as usize & 1;
             }
         } else {
             let mut sorted = d2;
@@ -740,6 +736,32 @@ impl Scan<'_> {
         }
         found.len = w;
     }
+}
+
+/// Candidates up to which `Scan::keep_nearest` ranks them (beyond, it selects).
+const RANKED: usize = 8 * LANES;
+
+/// Bit j set for each of the first `n` squared distances `d2` (the rest ∞) with fewer
+/// than `k` strictly smaller: the k nearest if exactly k bits are set, else a tie at the
+/// k-th distance. `G` groups of four lanes hold the `n`; for each candidate i every lane j
+/// adds 1 if d_i < d_j, so all the comparisons are independent.
+#[inline(always)]
+fn ranked_below<const G: usize>(d2: &[f32], n: usize, k: usize) -> u64 {
+    const { assert!(G * LANES <= RANKED) };
+    let groups: [Vec4; G] = std::array::from_fn(|g| Vec4::from_slice(&d2[g * LANES..]));
+    let mut nearer = [Vec4::ZERO; G];
+    for &di in &d2[..n] {
+        let di = Vec4::splat(di);
+        for (c, &dj) in nearer.iter_mut().zip(&groups) {
+            *c += Vec4::select(di.cmplt(dj), Vec4::ONE, Vec4::ZERO);
+        }
+    }
+    let k = Vec4::splat(k as f32);
+    let mut below = 0u64;
+    for (g, c) in nearer.iter().enumerate() {
+        below |= (c.cmplt(k).bitmask() as u64) << (g * LANES);
+    }
+    below & ((1u64 << n) - 1)
 }
 
 #[cfg(test)]
@@ -782,6 +804,59 @@ mod tests {
         check(&pts, 0.1, 16);
         check(&pts, 0.3, 16);
         check(&pts, 0.3, 1);
+    }
+
+    #[test]
+    fn keeping_the_k_nearest_keeps_the_candidates_order_and_gives_ties_to_the_first() {
+        // Candidates on a coarse lattice (many exact ties at every distance) and off it,
+        // for every count up to a full `Found` and several k: the kept places must be the
+        // k first of the candidates sorted by (distance, order found), in the order found.
+        let mut rng = Rng::new(7, 3, 1);
+        for trial in 0..4000 {
+            let n = 2 + trial % (COLLECT - 1);
+            let k = [1, 4, 7, 16, 16, 16, 24, 32][trial % 8].min(n - 1);
+            let coarse = trial % 2 == 0;
+            let coord = |rng: &mut Rng| {
+                if coarse {
+                    (rng.range(-3.0, 3.0)).round() * 0.25
+                } else {
+                    rng.range(-1.0, 1.0)
+                }
+            };
+            let pts: Vec<Vec3> = (0..n)
+                .map(|_| Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng)))
+                .collect();
+            let (xs, ys, zs): (Vec<f32>, Vec<f32>, Vec<f32>) =
+                pts.iter().map(|p| (p.x, p.y, p.z)).collect();
+            let scan = Scan {
+                xs: &xs,
+                ys: &ys,
+                zs: &zs,
+                p: (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO),
+                skip_slot: u32::MAX,
+                k,
+            };
+            let mut found = Found::default();
+            // Collected in a scrambled order, as a walk over cells would.
+            for (i, s) in found.slots[..n].iter_mut().enumerate() {
+                *s = ((i * 37 + trial) % n) as u32;
+            }
+            found.len = n;
+            let order = found.slots;
+            scan.keep_nearest(&mut found);
+            let mut want: Vec<(f32, usize)> = (0..n)
+                .map(|r| (pts[order[r] as usize].length_squared(), r))
+                .collect();
+            want.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            let mut want: Vec<usize> = want[..k].iter().map(|w| w.1).collect();
+            want.sort();
+            let want: Vec<u32> = want.iter().map(|&r| order[r]).collect();
+            assert_eq!(
+                &found.slots[..found.len],
+                &want[..],
+                "trial {trial}: n {n}, k {k}"
+            );
+        }
     }
 
     #[test]
