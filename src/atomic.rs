@@ -19,14 +19,95 @@ pub fn interrupted() -> bool {
 }
 
 use crate::error::{Error, Result};
+use sha2::{Digest, Sha256};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// A file's size in bytes and its SHA-256 (lower-case hex, as `sha256sum` prints it), as
+/// the cache set's manifest records them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Written {
+    pub bytes: u64,
+    pub sha256: String,
+}
+
+/// A writer that hashes every byte it passes on, in order: a file written front to back
+/// through it (no seeking) knows its [`Written`] when it is complete, so the bake need
+/// not read it back after its last frame (the serial tail of issue 14: 0.25 s for a
+/// 400 MB CSV).
+pub struct Hashing<W> {
+    inner: W,
+    sha: Sha256,
+    bytes: u64,
+}
+
+impl<W: Write> Hashing<W> {
+    pub fn new(inner: W) -> Self {
+        Hashing {
+            inner,
+            sha: Sha256::new(),
+            bytes: 0,
+        }
+    }
+
+    /// The writer and what went through it.
+    pub fn finish(self) -> (W, Written) {
+        let sha256 = hex(&self.sha.finalize());
+        let written = Written {
+            bytes: self.bytes,
+            sha256,
+        };
+        (self.inner, written)
+    }
+}
+
+impl<W: Write> Write for Hashing<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.sha.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Lower-case hex of `b`.
+pub fn hex(b: &[u8]) -> String {
+    use std::fmt::Write;
+    let mut s = String::with_capacity(2 * b.len());
+    for x in b {
+        let _ = write!(s, "{x:02x}");
+    }
+    s
+}
+
+/// A file being written front to back, buffered, hashing what it writes.
+pub type Output = BufWriter<Hashing<File>>;
+
+/// Opens `path` (created or truncated) as an [`Output`].
+pub fn create_output(path: &Path) -> Result<Output> {
+    let file = File::create(path).map_err(|e| Error::io(path, e))?;
+    Ok(BufWriter::with_capacity(1 << 20, Hashing::new(file)))
+}
+
+/// Flushes `out`, syncs its file to disk and returns what was written; `path` names it in
+/// errors.
+pub fn finish_output(out: Output, path: &Path) -> Result<Written> {
+    let (file, written) = out
+        .into_inner()
+        .map_err(|e| Error::io(path, e.into_error()))?
+        .finish();
+    file.sync_all().map_err(|e| Error::io(path, e))?;
+    Ok(written)
+}
+
 pub struct AtomicFile {
     tmp: PathBuf,
     dest: PathBuf,
-    writer: Option<BufWriter<File>>,
+    writer: Option<Output>,
 }
 
 impl AtomicFile {
@@ -45,11 +126,11 @@ impl AtomicFile {
         // alone, whatever the user named the shot.
         let _ = name;
         let tmp = temp_path(dir);
-        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let writer = create_output(&tmp)?;
         Ok(AtomicFile {
             tmp,
             dest: dest.to_path_buf(),
-            writer: Some(BufWriter::with_capacity(1 << 20, file)),
+            writer: Some(writer),
         })
     }
 
@@ -57,7 +138,7 @@ impl AtomicFile {
         &self.dest
     }
 
-    pub fn writer(&mut self) -> &mut BufWriter<File> {
+    pub fn writer(&mut self) -> &mut Output {
         self.writer.as_mut().expect("writer present until commit")
     }
 
@@ -65,20 +146,21 @@ impl AtomicFile {
     /// On failure the temporary file is removed (Drop no longer sees a writer).
     pub fn seal(mut self) -> Result<SealedFile> {
         let w = self.writer.take().expect("writer present until sealed");
-        let result = w
-            .into_inner()
-            .map_err(|e| Error::io(&self.tmp, e.into_error()))
-            .and_then(|file| file.sync_all().map_err(|e| Error::io(&self.tmp, e)));
+        let result = finish_output(w, &self.tmp);
         let tmp = std::mem::take(&mut self.tmp);
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
+        let written = match result {
+            Ok(written) => written,
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(e);
+            }
+        };
         Ok(SealedFile {
             tmp,
             dest: std::mem::take(&mut self.dest),
             committed: false,
             obsolete: Vec::new(),
+            written: Some(written),
         })
     }
 
@@ -98,6 +180,8 @@ pub struct SealedFile {
     committed: bool,
     /// Files made obsolete by this one, removed once it is in place.
     obsolete: Vec<PathBuf>,
+    /// Its size and hash, when worked out as it was written.
+    written: Option<Written>,
 }
 
 impl SealedFile {
@@ -108,6 +192,11 @@ impl SealedFile {
     /// Where the complete file is until it is committed.
     pub fn temp_path(&self) -> &Path {
         &self.tmp
+    }
+
+    /// Its size and hash, if they were worked out as it was written (else read the file).
+    pub fn written(&self) -> Option<&Written> {
+        self.written.as_ref()
     }
 
     /// Files to delete once this one is in place (e.g. value clips a new cache no longer
@@ -281,7 +370,8 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
 impl ScratchFile {
     /// Turns a complete scratch file into a sealed file for `dest` (same folder), synced to
     /// disk; it is no longer deleted on drop, but by the sealed file unless committed.
-    pub fn seal_as(mut self, dest: PathBuf) -> Result<SealedFile> {
+    /// `written`: what it holds, if known (as [`finish_output`] returns it).
+    pub fn seal_as(mut self, dest: PathBuf, written: Option<Written>) -> Result<SealedFile> {
         let tmp = std::mem::take(&mut self.path);
         let synced = std::fs::File::open(&tmp).and_then(|f| f.sync_all());
         if let Err(e) = synced {
@@ -293,6 +383,7 @@ impl ScratchFile {
             dest,
             committed: false,
             obsolete: Vec::new(),
+            written,
         })
     }
 }
@@ -308,6 +399,34 @@ impl Drop for ScratchFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sealed_file_knows_the_size_and_sha256_of_what_is_on_disk() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut f = AtomicFile::create(&dir.path().join("abc.txt")).unwrap();
+        for piece in [&b"a"[..], b"", b"bc"] {
+            f.write_all(piece).unwrap();
+        }
+        let sealed = f.seal().unwrap();
+        // FIPS 180-2's example.
+        let abc = "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad";
+        assert_eq!(sealed.written().unwrap().sha256, abc);
+        assert_eq!(sealed.written().unwrap().bytes, 3);
+        // Larger than the buffer, in odd pieces: what was hashed is what was stored.
+        let mut f = AtomicFile::create(&dir.path().join("big.bin")).unwrap();
+        let data: Vec<u8> = (0..3_000_017u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect();
+        for piece in data.chunks(65_521) {
+            f.write_all(piece).unwrap();
+        }
+        let sealed = f.seal().unwrap();
+        let on_disk = std::fs::read(sealed.temp_path()).unwrap();
+        assert_eq!(on_disk, data);
+        let want = hex(&Sha256::digest(&on_disk));
+        assert_eq!(sealed.written().unwrap().sha256, want);
+        assert_eq!(sealed.written().unwrap().bytes, data.len() as u64);
+    }
 
     #[test]
     fn stale_temporaries_of_dead_processes_are_removed_and_nothing_else() {

@@ -326,9 +326,7 @@ pub fn hash_file(path: &Path) -> Result<(u64, String)> {
     Ok((bytes, hex(&h.finalize())))
 }
 
-fn hex(b: &[u8]) -> String {
-    b.iter().map(|x| format!("{x:02x}")).collect()
-}
+use crate::atomic::hex;
 
 /// `path` relative to `dir`, `/`-separated.
 fn relative(dir: &Path, path: &Path) -> Result<String> {
@@ -369,9 +367,10 @@ fn sync_dir(dir: &Path) {
 
 /// Replaces the cache set of `info.shot_name` in `dir` with the sealed `files` (every file
 /// of the new set, in rename order) as described in the module doc; returns their final
-/// paths. The files are hashed first (an interrupt there still drops them all and leaves
-/// the previous set whole); once the manifest says the set is being replaced, the renames
-/// and removals run to the end whatever signal comes.
+/// paths. Files their writers did not hash as they wrote them are hashed first (an
+/// interrupt there still drops them all and leaves the previous set whole); once the
+/// manifest says the set is being replaced, the renames and removals run to the end
+/// whatever signal comes.
 pub fn commit(dir: &Path, info: &SetInfo, files: Vec<SealedFile>) -> Result<Vec<PathBuf>> {
     use rayon::prelude::*;
     crate::atomic::check_destinations(&files)?;
@@ -379,7 +378,11 @@ pub fn commit(dir: &Path, info: &SetInfo, files: Vec<SealedFile>) -> Result<Vec<
     let entries = files
         .par_iter()
         .map(|f| -> Result<FileEntry> {
-            let (bytes, sha256) = hash_file(f.temp_path())?;
+            // Hashed as it was written, or read back now.
+            let (bytes, sha256) = match f.written() {
+                Some(w) => (w.bytes, w.sha256.clone()),
+                None => hash_file(f.temp_path())?,
+            };
             Ok(FileEntry {
                 path: relative(dir, f.dest())?,
                 bytes,

@@ -37,7 +37,7 @@ mod text;
 
 use super::CacheWriter;
 use super::wings::{self, WingDisplay};
-use crate::atomic::{AtomicFile, ScratchFile, SealedFile};
+use crate::atomic::{self, AtomicFile, Output, ScratchFile, SealedFile, Written};
 use crate::error::{Error, Result};
 use crate::sim::{CacheMeta, Frame, SwarmFrame, SwarmMeta};
 use crate::species::{Alpha, Drive, Primitive, Species};
@@ -370,6 +370,8 @@ struct PendingClip {
     scratch: ScratchFile,
     dest: PathBuf,
     start: i32,
+    /// Its size and hash, worked out as it was written.
+    written: Written,
 }
 
 /// About how many bytes of samples one instance adds per frame (positions, orientations,
@@ -625,7 +627,7 @@ impl UsdaWriter {
         &self,
         chunk: &mut Chunk,
         swarm: usize,
-        out: &mut BufWriter<File>,
+        out: &mut Output,
         out_path: &Path,
     ) -> Result<()> {
         let m = &self.meta.swarms[swarm];
@@ -657,7 +659,7 @@ impl UsdaWriter {
         let dest = self.clip_dest(index, count);
         let scratch = ScratchFile::new(&self.clips_dir, "usda.clip");
         let path = scratch.path.clone();
-        let mut out = BufWriter::with_capacity(1 << 20, File::create(&path).map_err(io(&path))?);
+        let mut out = atomic::create_output(&path)?;
         let last = (chunk.start + self.clip_frames as i32).min(self.meta.frame_end);
         let mut head = String::new();
         let _ = write!(
@@ -679,14 +681,12 @@ impl UsdaWriter {
             out.write_all(b"    }\n").map_err(io(&path))?;
         }
         out.write_all(b"}\n\n").map_err(io(&path))?;
-        let file = out
-            .into_inner()
-            .map_err(|e| Error::io(&path, e.into_error()))?;
-        file.sync_all().map_err(io(&path))?;
+        let written = atomic::finish_output(out, &path)?;
         self.clips.push(PendingClip {
             scratch,
             dest,
             start: chunk.start,
+            written,
         });
         Ok(())
     }
@@ -717,7 +717,7 @@ impl UsdaWriter {
     }
 
     /// Static instancer data: ids, prototype indices, scales, the prototype relationship.
-    fn write_static(&self, swarm: usize, out: &mut BufWriter<File>, path: &Path) -> Result<()> {
+    fn write_static(&self, swarm: usize, out: &mut Output, path: &Path) -> Result<()> {
         let m = &self.meta.swarms[swarm];
         let mut t = Vec::with_capacity(m.count * 12 + 256);
         let mut ib = itoa::Buffer::new();
@@ -1111,7 +1111,7 @@ impl UsdaWriter {
         let mut written = Vec::new();
         for c in std::mem::take(&mut self.clips) {
             written.push(c.dest.clone());
-            sealed.push(c.scratch.seal_as(c.dest)?);
+            sealed.push(c.scratch.seal_as(c.dest, Some(c.written))?);
         }
         sealed.push(manifest.seal()?);
         let stale = stale_clips(&self.clips_dir, &self.meta.shot_name, &written);
