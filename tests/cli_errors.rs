@@ -869,6 +869,14 @@ fn bad_bench_options_name_the_option() {
             &["--density", "0"][..],
             "error: --density: expected bees per cubic metre from 0.001 to 1e7, found 0",
         ),
+        (
+            &["--containment", "2000"][..],
+            "error: --containment: expected an acceleration from 0 to 1000, found 2000",
+        ),
+        (
+            &["--containment", "NaN"][..],
+            "error: --containment: expected an acceleration from 0 to 1000, found NaN",
+        ),
     ] {
         let mut all = vec!["bench", "--bees", "10"];
         all.extend_from_slice(args);

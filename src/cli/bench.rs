@@ -32,9 +32,14 @@ pub struct BenchArgs {
     /// Preset of that model (default: the model's first).
     #[arg(long)]
     pub preset: Option<String>,
-    /// Bees per cubic metre, held by soft bounds on the spawn box.
+    /// Bees per cubic metre in the spawn box, which soft bounds enclose.
     #[arg(long, default_value_t = 500.0)]
     pub density: f64,
+    /// The bounds' pull back into the box, m/s² per metre outside (default: the preset's,
+    /// 4 for the bee). Pressure pushes a crowd out of gently held bounds within a second;
+    /// 1000 holds it (the JSON's `inside_at_end` tells how much stayed in).
+    #[arg(long)]
+    pub containment: Option<f64>,
     /// Add a nest that draws every bee into one cloud (density then grows with the count).
     #[arg(long)]
     pub nest: bool,
@@ -47,13 +52,22 @@ pub struct BenchShot<'a> {
     pub substeps: u32,
     pub model: &'a str,
     pub preset: Option<&'a str>,
-    /// Bees per cubic metre in the spawn box, which soft bounds hold.
+    /// Bees per cubic metre in the spawn box, which soft bounds enclose.
     pub density: f64,
+    /// The bounds' `containment` (None: the preset's).
+    pub containment: Option<f64>,
     pub nest: bool,
 }
 
-/// A swarm at a constant density (soft bounds on the spawn box), so that the work per bee
-/// stays the same as the count grows.
+/// The bench's spawn box (and bounds) for `bees` at `density` per m³: its centre and edge,
+/// metres.
+pub fn bench_box(bees: usize, density: f64) -> (glam::Vec3, f64) {
+    let side = (bees as f64 / density).cbrt().max(0.01);
+    (glam::Vec3::new(0.0, (side / 2.0 + 0.5) as f32, 0.0), side)
+}
+
+/// A swarm at a given density in soft bounds on its spawn box, so that the work per bee
+/// stays the same as the count grows (a crowd needs a strong `containment` to stay).
 pub fn bench_shot(b: &BenchShot) -> std::result::Result<Shot, crate::error::ShotError> {
     let BenchShot {
         bees,
@@ -63,10 +77,14 @@ pub fn bench_shot(b: &BenchShot) -> std::result::Result<Shot, crate::error::Shot
         nest,
         ..
     } = *b;
-    let side = (bees as f64 / b.density).cbrt().max(0.01);
+    let side = bench_box(bees, b.density).1;
     let preset = b
         .preset
         .map(|p| format!("preset = \"{p}\"\n"))
+        .unwrap_or_default();
+    let params = b
+        .containment
+        .map(|c| format!("params = {{ containment = {c:?} }}\n"))
         .unwrap_or_default();
     // Soft bounds on the spawn box keep the density constant as the count grows; a nest
     // pulls every bee into one ever denser cloud instead.
@@ -79,7 +97,7 @@ pub fn bench_shot(b: &BenchShot) -> std::result::Result<Shot, crate::error::Shot
         String::new()
     };
     let src = format!(
-        "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\nmodel = \"{model}\"\n{preset}spawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\nbounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n{target}",
+        "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\nmodel = \"{model}\"\n{preset}spawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\nbounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n{params}{target}",
         frames + 1,
         c = side / 2.0 + 0.5
     );
@@ -96,6 +114,11 @@ pub fn run(a: BenchArgs) -> Result<()> {
             a.density
         )));
     }
+    if let Some(c) = a.containment.filter(|c| !c.is_finite()) {
+        return Err(Error::input(format!(
+            "--containment: expected an acceleration from 0 to 1000, found {c}"
+        )));
+    }
     let shot = bench_shot(&BenchShot {
         bees: a.bees,
         frames: a.frames,
@@ -103,6 +126,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         model: &a.model,
         preset: a.preset.as_deref(),
         density: a.density,
+        containment: a.containment,
         nest: a.nest,
     })
     .map_err(|e| {
@@ -112,6 +136,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
             "scene.frames" => "--frames",
             k if k.ends_with(".preset") => "--preset",
             k if k.ends_with(".model") => "--model",
+            k if k.ends_with(".containment") || k.ends_with(".params") => "--containment",
             _ => "--bees",
         };
         let hint = e.hint.map(|h| format!("\n  hint: {h}")).unwrap_or_default();
@@ -122,13 +147,18 @@ pub fn run(a: BenchArgs) -> Result<()> {
     } else {
         a.threads
     };
-    let (seconds, rss) = with_threads(threads, || {
+    let (seconds, rss, inside) = with_threads(threads, || {
         let mut sim = Simulation::new(&shot);
         let t = Instant::now();
         for _ in 0..a.frames {
             sim.advance();
         }
-        (t.elapsed().as_secs_f64(), peak_rss_mb())
+        let seconds = t.elapsed().as_secs_f64();
+        (
+            seconds,
+            peak_rss_mb(),
+            share_inside(&sim, a.bees, a.density),
+        )
     })?;
     let steps = (a.bees * a.frames) as f64 * a.substeps as f64;
     crate::progress::stdout(&format!(
@@ -141,7 +171,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
             "model": shot.swarms[0].model.name(),
             "preset": shot.swarms[0].preset,
             "density_per_m3": a.density,
-            "scene": if a.nest { "nest: every bee drawn to one nest" } else { "constant density in soft bounds" },
+            "containment": a.containment,
+            "inside_at_end": inside,
+            "scene": if a.nest { "nest: every bee drawn to one nest" } else { "a swarm in soft bounds on its spawn box" },
             "bee_steps": steps,
             "ns_per_bee_step": (seconds * 1e9 / steps * 10.0).round() / 10.0,
             "seconds": (seconds * 1000.0).round() / 1000.0,
@@ -151,6 +183,20 @@ pub fn run(a: BenchArgs) -> Result<()> {
         })
     ));
     Ok(())
+}
+
+/// The share of the bees inside the spawn box after the last frame, to 3 decimals: how much
+/// of the density the bounds held.
+fn share_inside(sim: &Simulation, bees: usize, density: f64) -> f64 {
+    let (center, side) = bench_box(bees, density);
+    let half = (side / 2.0) as f32;
+    let inside = sim
+        .record()
+        .iter()
+        .flat_map(|s| &s.position)
+        .filter(|p| (**p - center).abs().max_element() <= half)
+        .count();
+    (inside as f64 / bees.max(1) as f64 * 1000.0).round() / 1000.0
 }
 
 /// Peak resident memory of this process in MB (Linux), or null elsewhere.
@@ -164,4 +210,36 @@ pub fn peak_rss_mb() -> Option<f64> {
         .parse()
         .ok()?;
     Some((kb / 1024.0).round())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Why `--containment` exists: released at 100,000 per m³, SPH pressure empties the
+    /// gently held box within half a second; the strongest containment keeps a crowd in.
+    #[test]
+    fn a_crowd_leaves_gently_held_bounds_and_strong_ones_hold_it() {
+        let inside = |containment: Option<f64>| {
+            let shot = bench_shot(&BenchShot {
+                bees: 2_000,
+                frames: 12,
+                substeps: 4,
+                model: "bee",
+                preset: None,
+                density: 100_000.0,
+                containment,
+                nest: false,
+            })
+            .unwrap();
+            let mut sim = Simulation::new(&shot);
+            for _ in 0..12 {
+                sim.advance();
+            }
+            share_inside(&sim, 2_000, 100_000.0)
+        };
+        let (gentle, held) = (inside(None), inside(Some(1000.0)));
+        assert!(gentle < 0.05, "{gentle}");
+        assert!(held > 0.3, "{held}");
+    }
 }
