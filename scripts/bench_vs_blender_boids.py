@@ -9,7 +9,8 @@ Blender side: a fresh bpy process (from the test venv's `bpy`) adds an emitter w
 particle system uses boids physics (Blender's defaults: separate, flock, goal rules),
 emits every particle on frame 1 and steps the scene frame by frame to the end, which is
 what evaluating (or baking) the particle cache does. beeswarm side: `beeswarm bake` of a
-shot holding one swarm of the same count and frame range (4 substeps per frame, the
+shot holding one swarm of the same count and frame range (`--model`: the bee model by
+default, or beeswarm's own boids; 4 substeps per frame, the
 default spawn box at 500 bees per m³), writing the tracks CSV, the lightest cache. Each
 time is the whole process, start-up included. Prints one line per run and the medians.
 This is a benchmark, not a test: nothing asserts on it.
@@ -64,13 +65,16 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--beeswarm", default="target/release/beeswarm")
     ap.add_argument("--threads", type=int, default=0, help="beeswarm threads (0: all cores)")
+    ap.add_argument("--model", default="bee",
+                    help="beeswarm's model: bee (paper 000, the default) or boids (its Reynolds "
+                         "baseline, the same kind of model as Blender's)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         shot = tmp / "bench.toml"
         shot.write_text(
             f'[scene]\nname = "bench"\nframes = [1, {a.frames}]\n'
-            f"[[swarm]]\ncount = {a.agents}\n"
+            f"[[swarm]]\ncount = {a.agents}\nmodel = \"{a.model}\"\n"
         )
         times = {"blender": [], "beeswarm": []}
         for k in range(a.runs):
@@ -87,7 +91,7 @@ def main():
                 times[who].append(t)
                 print(f"run {k + 1}: {who:8} {t:7.2f} s", flush=True)
         b, s = statistics.median(times["blender"]), statistics.median(times["beeswarm"])
-        print(f"{a.agents} agents x {a.frames} frames, medians of {a.runs}: "
+        print(f"{a.agents} agents x {a.frames} frames, beeswarm model {a.model}, medians of {a.runs}: "
               f"Blender boids {b:.2f} s ({min(times['blender']):.2f}-{max(times['blender']):.2f}), "
               f"beeswarm {s:.2f} s ({min(times['beeswarm']):.2f}-{max(times['beeswarm']):.2f}): "
               f"beeswarm {b / s:.1f}x faster per frame")
