@@ -370,8 +370,8 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
 impl ScratchFile {
     /// Turns a complete scratch file into a sealed file for `dest` (same folder), synced to
     /// disk; it is no longer deleted on drop, but by the sealed file unless committed.
-    /// `written`: what it holds, if known (as [`finish_output`] returns it).
-    pub fn seal_as(mut self, dest: PathBuf, written: Option<Written>) -> Result<SealedFile> {
+    /// The cache set hashes it when it commits (see `export::usda`'s clips for why).
+    pub fn seal_as(mut self, dest: PathBuf) -> Result<SealedFile> {
         let tmp = std::mem::take(&mut self.path);
         let synced = std::fs::File::open(&tmp).and_then(|f| f.sync_all());
         if let Err(e) = synced {
@@ -383,7 +383,7 @@ impl ScratchFile {
             dest,
             committed: false,
             obsolete: Vec::new(),
-            written,
+            written: None,
         })
     }
 }

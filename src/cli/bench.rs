@@ -59,11 +59,11 @@ pub struct BenchShot<'a> {
     pub nest: bool,
 }
 
-/// The bench's spawn box (and bounds) for `bees` at `density` per m³: its centre and edge,
-/// metres.
-pub fn bench_box(bees: usize, density: f64) -> (glam::Vec3, f64) {
+/// The bench's spawn box (and bounds) for `bees` at `density` per m³: the height of its
+/// centre above the origin (its bottom half a metre up) and its edge, metres.
+pub fn bench_box(bees: usize, density: f64) -> (f64, f64) {
     let side = (bees as f64 / density).cbrt().max(0.01);
-    (glam::Vec3::new(0.0, (side / 2.0 + 0.5) as f32, 0.0), side)
+    (side / 2.0 + 0.5, side)
 }
 
 /// A swarm at a given density in soft bounds on its spawn box, so that the work per bee
@@ -77,7 +77,7 @@ pub fn bench_shot(b: &BenchShot) -> std::result::Result<Shot, crate::error::Shot
         nest,
         ..
     } = *b;
-    let side = bench_box(bees, b.density).1;
+    let (height, side) = bench_box(bees, b.density);
     let preset = b
         .preset
         .map(|p| format!("preset = \"{p}\"\n"))
@@ -86,20 +86,19 @@ pub fn bench_shot(b: &BenchShot) -> std::result::Result<Shot, crate::error::Shot
         .containment
         .map(|c| format!("params = {{ containment = {c:?} }}\n"))
         .unwrap_or_default();
-    // Soft bounds on the spawn box keep the density constant as the count grows; a nest
-    // pulls every bee into one ever denser cloud instead.
+    // Soft bounds on the spawn box keep the swarm where it was spawned, loosely (a sparse
+    // swarm breathes in and out of the box; `containment` sets how firmly), so that the
+    // density does not fall as the count grows; a nest pulls every bee into one ever
+    // denser cloud instead.
     let target = if nest {
-        format!(
-            "\n[[target]]\ntype = \"nest\"\nposition = [0, {}, 0]\n",
-            side / 2.0 + 0.5
-        )
+        format!("\n[[target]]\ntype = \"nest\"\nposition = [0, {height}, 0]\n")
     } else {
         String::new()
     };
     let src = format!(
         "[scene]\nname = \"bench\"\nfps = 24\nframes = [1, {}]\nsubsteps = {substeps}\nseed = 1\n\n[[swarm]]\ncount = {bees}\nmodel = \"{model}\"\n{preset}spawn = {{ shape = \"box\", center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\nbounds = {{ center = [0, {c}, 0], size = [{side}, {side}, {side}] }}\n{params}{target}",
         frames + 1,
-        c = side / 2.0 + 0.5
+        c = height
     );
     shot::parse(&src, Path::new("<bench>"), Path::new("."))
 }
@@ -188,7 +187,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
 /// The share of the bees inside the spawn box after the last frame, to 3 decimals: how much
 /// of the density the bounds held.
 fn share_inside(sim: &Simulation, bees: usize, density: f64) -> f64 {
-    let (center, side) = bench_box(bees, density);
+    let (height, side) = bench_box(bees, density);
+    let center = glam::Vec3::new(0.0, height as f32, 0.0);
     let half = (side / 2.0) as f32;
     let inside = sim
         .record()

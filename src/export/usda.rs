@@ -1115,7 +1115,7 @@ impl UsdaWriter {
         let mut written = Vec::new();
         for c in std::mem::take(&mut self.clips) {
             written.push(c.dest.clone());
-            sealed.push(c.scratch.seal_as(c.dest, None)?);
+            sealed.push(c.scratch.seal_as(c.dest)?);
         }
         sealed.push(manifest.seal()?);
         let stale = stale_clips(&self.clips_dir, &self.meta.shot_name, &written);
