@@ -8,7 +8,7 @@
 # the calibrated zonal model of paper 002 (presets/mosquito_cage_zonal.toml) are baked on
 # eight held-out seeds each and compared with part 1/2, the flights the database never saw.
 #
-#   scripts/validate_fastswarm.sh        # about 2 minutes on 2 cores; not part of CI
+#   scripts/validate_fastswarm.sh        # about 5 s on 2 cores after the build; not part of CI
 #
 # Writes out/validation_fastswarm/* and docs/validation_fastswarm_table.md.
 set -euo pipefail
