@@ -84,25 +84,8 @@ pub fn hex(b: &[u8]) -> String {
     s
 }
 
-/// A file being written front to back, buffered, hashing what it writes.
+/// An [`AtomicFile`]'s writer: buffered, hashing what it writes.
 pub type Output = BufWriter<Hashing<File>>;
-
-/// Opens `path` (created or truncated) as an [`Output`].
-pub fn create_output(path: &Path) -> Result<Output> {
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    Ok(BufWriter::with_capacity(1 << 20, Hashing::new(file)))
-}
-
-/// Flushes `out`, syncs its file to disk and returns what was written; `path` names it in
-/// errors.
-pub fn finish_output(out: Output, path: &Path) -> Result<Written> {
-    let (file, written) = out
-        .into_inner()
-        .map_err(|e| Error::io(path, e.into_error()))?
-        .finish();
-    file.sync_all().map_err(|e| Error::io(path, e))?;
-    Ok(written)
-}
 
 pub struct AtomicFile {
     tmp: PathBuf,
@@ -126,11 +109,11 @@ impl AtomicFile {
         // alone, whatever the user named the shot.
         let _ = name;
         let tmp = temp_path(dir);
-        let writer = create_output(&tmp)?;
+        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         Ok(AtomicFile {
             tmp,
             dest: dest.to_path_buf(),
-            writer: Some(writer),
+            writer: Some(BufWriter::with_capacity(1 << 20, Hashing::new(file))),
         })
     }
 
@@ -146,7 +129,14 @@ impl AtomicFile {
     /// On failure the temporary file is removed (Drop no longer sees a writer).
     pub fn seal(mut self) -> Result<SealedFile> {
         let w = self.writer.take().expect("writer present until sealed");
-        let result = finish_output(w, &self.tmp);
+        let result = w
+            .into_inner()
+            .map_err(|e| Error::io(&self.tmp, e.into_error()))
+            .and_then(|hashing| {
+                let (file, written) = hashing.finish();
+                file.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
+                Ok(written)
+            });
         let tmp = std::mem::take(&mut self.tmp);
         let written = match result {
             Ok(written) => written,

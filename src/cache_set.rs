@@ -18,7 +18,7 @@
 //! folder reads it and, when it commits, removes every file of the unfinished set it does
 //! not write itself: only files a manifest listed, never anything else. See docs/caches.md.
 
-use crate::atomic::SealedFile;
+use crate::atomic::{SealedFile, hex};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -325,8 +325,6 @@ pub fn hash_file(path: &Path) -> Result<(u64, String)> {
     }
     Ok((bytes, hex(&h.finalize())))
 }
-
-use crate::atomic::hex;
 
 /// `path` relative to `dir`, `/`-separated.
 fn relative(dir: &Path, path: &Path) -> Result<String> {
