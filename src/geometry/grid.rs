@@ -147,6 +147,7 @@ impl Grid {
         let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (lo, hi) = positions
             .par_iter()
+            .with_min_len(4096)
             .fold(|| empty, |(a, b), p| (a.min(*p), b.max(*p)))
             .reduce(|| empty, |(a, b), (c, d)| (a.min(c), b.max(d)));
         let (lo, hi) = if n == 0 {
@@ -157,16 +158,22 @@ impl Grid {
         let radius = radius.max(1e-6);
         self.layout(lo, hi, self.capped(lo, hi, radius, n, 1), 1);
         self.sort(positions, except, visit);
-        // How crowded a typical agent's cell is: the agent-weighted mean occupancy.
-        let crowd = self
-            .starts
-            .windows(2)
-            .map(|w| {
-                let c = (w[1] - w[0]) as f64;
-                c * c
-            })
-            .sum::<f64>()
-            / n.max(1) as f64;
+        // How crowded a typical agent's cell is: the agent-weighted mean occupancy,
+        // Σ count² over the cells, an exact integer either way it is summed: over the
+        // cells, or over the agents where there are fewer of them (a small swarm spread
+        // wide has many more cells than agents).
+        let occupancy = |c: usize| (self.starts[c + 1] - self.starts[c]) as u64;
+        let squares: u64 = if self.starts.len() - 1 <= self.len() {
+            (0..self.starts.len() - 1)
+                .map(|c| occupancy(c).pow(2))
+                .sum()
+        } else {
+            self.items[..self.len()]
+                .iter()
+                .map(|&i| occupancy(self.cells[i as usize] as usize))
+                .sum()
+        };
+        let crowd = squares as f64 / n.max(1) as f64;
         if crowd > (TARGET_OCCUPANCY as f64) * 2.0 {
             // Crowded: the edge that holds about TARGET_OCCUPANCY agents at that density.
             let cell = self.cell * (TARGET_OCCUPANCY / crowd as f32).cbrt();
@@ -221,33 +228,36 @@ impl Grid {
                 .with_min_len(1024)
                 .map(|p| self.index(self.cell_of(*p)) as u32),
         );
+        // Counts, then each cell's end; the agents placed from the last visited back, each
+        // cell filled from its end, leaves every start where its cell begins (and each
+        // cell in visit order) without a copy of the starts to fill from.
         self.starts.clear();
         self.starts.resize(total + 1, 0);
         for (i, &c) in cells.iter().enumerate() {
             if !out(i) {
-                self.starts[c as usize + 1] += 1;
+                self.starts[c as usize] += 1;
             }
         }
-        for i in 0..total {
-            self.starts[i + 1] += self.starts[i];
+        for i in 1..total {
+            self.starts[i] += self.starts[i - 1];
         }
+        self.starts[total] = n as u32;
         self.items.clear();
         self.items.resize(n + LANES - 1, u32::MAX);
         self.slot.clear();
         self.slot.resize(positions.len(), u32::MAX);
-        let mut fill = self.starts[..total].to_vec();
         let mut place = |i: usize| {
             if !out(i) {
-                let f = &mut fill[cells[i] as usize];
+                let f = &mut self.starts[cells[i] as usize];
+                *f -= 1;
                 self.items[*f as usize] = i as u32;
                 self.slot[i] = *f;
-                *f += 1;
             }
         };
         if visit.is_empty() {
-            (0..cells.len()).for_each(&mut place);
+            (0..cells.len()).rev().for_each(&mut place);
         } else {
-            visit.iter().for_each(|&i| place(i as usize));
+            visit.iter().rev().for_each(|&i| place(i as usize));
         }
         self.cells = cells;
         // Positions in items order: one pass filling the three axes (three passes each

@@ -393,6 +393,9 @@ where
         // with the agents.
         let row = channels.max(1);
         self.values.resize(n * row, 0.0);
+        // Small swarms in pieces too: run on one thread, the poses of a few hundred agents
+        // kept the other idle long enough to fall asleep, and the next pass woke it.
+        let pieces = piece(n, 512);
         f.ids
             .par_iter_mut()
             .zip(f.position.par_iter_mut())
@@ -404,7 +407,7 @@ where
             .zip(self.values.par_chunks_mut(row))
             .zip(slots.par_iter())
             .enumerate()
-            .with_min_len(512)
+            .with_min_len(pieces)
             .for_each(
                 |(k, ((((((((id, pos), vel), ori), head), ang), scale), values), &slot))| {
                     let a = &agents[slot as usize - start];
@@ -1303,7 +1306,8 @@ fn largest_move(now: &[Vec3], then: &[Vec3]) -> f32 {
 /// agents: `most` in large swarms (from 2,048 agents on two threads), where fewer pieces
 /// cost less to hand out, but at least 8 pieces per thread in small ones, so that a piece
 /// holding a dense spot does not leave the other threads idle: pieces of 128 cut 300
-/// agents into two halves. (Pieces change no result: each agent is computed alone.)
+/// agents into two halves. The recording's poses take pieces of up to 512 alike. (Pieces
+/// change no result: each agent is computed alone.)
 fn piece(n: usize, most: usize) -> usize {
     (n / (8 * rayon::current_num_threads())).clamp(16, most)
 }
