@@ -410,6 +410,12 @@ where
             .with_min_len(pieces)
             .for_each(
                 |(k, ((((((((id, pos), vel), ori), head), ang), scale), values), &slot))| {
+                    // Agents are stored in cell order and recorded in id order: in a large
+                    // swarm each read misses the caches, so the agent a few ids on is asked
+                    // for now (100,000 bees: the poses took 9 % of a bench, 2.6 % at 10,000).
+                    if let Some(&ahead) = slots.get(k + PREFETCH_AHEAD) {
+                        prefetch(&agents[ahead as usize - start]);
+                    }
                     let a = &agents[slot as usize - start];
                     let pose = m.pose(a, dt);
                     m.record(a, &pose, &mut values[..channels]);
@@ -1310,6 +1316,26 @@ fn largest_move(now: &[Vec3], then: &[Vec3]) -> f32 {
 /// change no result: each agent is computed alone.)
 fn piece(n: usize, most: usize) -> usize {
     (n / (8 * rayon::current_num_threads())).clamp(16, most)
+}
+
+/// How many agents ahead [`Runner::record`] asks the caches for.
+const PREFETCH_AHEAD: usize = 8;
+
+/// Asks the CPU to bring `x` into the caches: a hint, which changes no result.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // Every 64-byte line `x` touches: from its first byte in steps of 64, and its last.
+        let (p, size) = ((x as *const T).cast::<i8>(), std::mem::size_of::<T>());
+        for at in (0..size).step_by(64).chain([size.saturating_sub(1)]) {
+            // SAFETY: a prefetch reads nothing architecturally and never faults.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(at)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
 
 /// Reorders `v`: entry k becomes the old entry `old_of_new[k]`, through `spare` (a buffer
