@@ -18,11 +18,11 @@
 //! folder reads it and, when it commits, removes every file of the unfinished set it does
 //! not write itself: only files a manifest listed, never anything else. See docs/caches.md.
 
-use crate::atomic::{SealedFile, hex};
+use crate::atomic::{Hashing, SealedFile, Written, hex};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
-use std::io::Read;
+use std::io::{Read, Write};
 use std::path::{Component, Path, PathBuf};
 
 /// The manifest format's version, written as `beeswarm_cache_set`.
@@ -306,12 +306,12 @@ impl Drop for BakeLock {
     }
 }
 
-/// Size and SHA-256 of a file, read in 1 MiB blocks; stops on an interrupt.
-pub fn hash_file(path: &Path) -> Result<(u64, String)> {
+/// Size and SHA-256 of a file, read in 1 MiB blocks through the same [`Hashing`] writer
+/// the bake's files are hashed by as they are written; stops on an interrupt.
+pub fn hash_file(path: &Path) -> Result<Written> {
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut h = Sha256::new();
+    let mut h = Hashing::new(std::io::sink());
     let mut buf = vec![0u8; 1 << 20];
-    let mut bytes = 0u64;
     loop {
         if crate::atomic::interrupted() {
             return Err(Error::bake(crate::atomic::INTERRUPTED_MESSAGE));
@@ -320,10 +320,9 @@ pub fn hash_file(path: &Path) -> Result<(u64, String)> {
         if n == 0 {
             break;
         }
-        h.update(&buf[..n]);
-        bytes += n as u64;
+        h.write_all(&buf[..n]).map_err(|e| Error::io(path, e))?;
     }
-    Ok((bytes, hex(&h.finalize())))
+    Ok(h.finish().1)
 }
 
 /// `path` relative to `dir`, `/`-separated.
@@ -377,8 +376,8 @@ pub fn commit(dir: &Path, info: &SetInfo, files: Vec<SealedFile>) -> Result<Vec<
         .par_iter()
         .map(|f| -> Result<FileEntry> {
             // Hashed as it was written, or read back now.
-            let (bytes, sha256) = match f.written() {
-                Some(w) => (w.bytes, w.sha256.clone()),
+            let Written { bytes, sha256 } = match f.written() {
+                Some(w) => w.clone(),
                 None => hash_file(f.temp_path())?,
             };
             Ok(FileEntry {
@@ -446,8 +445,8 @@ pub fn verify(dir: &Path, shot_name: &str) -> std::result::Result<Manifest, Stri
         return Err("the manifest says a replacement is under way".to_owned());
     }
     for f in &m.files {
-        let (bytes, sha) = hash_file(&dir.join(&f.path)).map_err(|e| e.to_string())?;
-        if bytes != f.bytes || sha != f.sha256 {
+        let w = hash_file(&dir.join(&f.path)).map_err(|e| e.to_string())?;
+        if w.bytes != f.bytes || w.sha256 != f.sha256 {
             return Err(format!("{} is not the file the manifest lists", f.path));
         }
     }
@@ -520,7 +519,7 @@ mod tests {
         drop(f);
         for _ in 0..3 {
             let t = std::time::Instant::now();
-            let (bytes, _) = hash_file(&p).unwrap();
+            let bytes = hash_file(&p).unwrap().bytes;
             let s = t.elapsed().as_secs_f64();
             println!(
                 "{} MB in {s:.2} s: {:.0} MB/s",
@@ -537,10 +536,11 @@ mod tests {
         std::fs::write(&p, "abc").unwrap();
         assert_eq!(
             hash_file(&p).unwrap(),
-            (
-                3,
-                "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad".to_owned()
-            )
+            Written {
+                bytes: 3,
+                sha256: "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+                    .to_owned()
+            }
         );
     }
 }
