@@ -6,10 +6,12 @@
 //! in grid order, so results are identical for any number of threads.
 //!
 //! **Cell order.** Each swarm whose model lists neighbours keeps its agents stored in the
-//! grid's cell order, renewed at every grid build (`Simulation::store_in_cell_order`): agents
-//! near each other in space sit near each other in memory, so every pass — records, lists,
-//! steps — reads its neighbours from cache, and each thread works on its own part of space
-//! in every pass, instead of reading what another core wrote the pass before. An agent's
+//! grid's cell order, renewed at each frame's first grid build
+//! (`Simulation::store_in_cell_order`; within a frame agents move a few millimetres, so
+//! the order stays close): agents near each other in space sit near each other in memory,
+//! so every pass — records, lists, steps — reads its neighbours from cache, and each thread
+//! works on its own part of space in every pass, instead of reading what another core
+//! wrote the pass before. An agent's
 //! index (where it is stored) thus changes as it moves; its *id* (its place in the shot's
 //! order) does not: ids seed its random numbers, name it in the caches and checkpoints,
 //! order the grid's cells and the lists, so no result depends on where it is stored.
@@ -964,7 +966,9 @@ impl Simulation {
             self.grid
                 .build_visiting(&self.positions, self.grid_cell, except, &self.slots);
             // Between rebuilds the candidates name agents by index: keep them in place.
-            if listing != Listing::Reuse {
+            // Once a frame: within a frame agents move a few millimetres, so the order
+            // of its first substep stays close to the grid's for the rest.
+            if listing != Listing::Reuse && substep == 0 {
                 self.store_in_cell_order();
             }
         }
