@@ -72,6 +72,9 @@ pub struct Grid {
     ys: Vec<f32>,
     zs: Vec<f32>,
     cells: Vec<u32>,
+    /// The parallel counting sort's per-piece counts, then cursors: piece p's for cell c
+    /// at `p * cells + c`.
+    cursors: Vec<u32>,
 }
 
 /// The largest `k` a query takes.
@@ -228,38 +231,48 @@ impl Grid {
                 .with_min_len(1024)
                 .map(|p| self.index(self.cell_of(*p)) as u32),
         );
-        // Counts, then each cell's end; the agents placed from the last visited back, each
-        // cell filled from its end, leaves every start where its cell begins (and each
-        // cell in visit order) without a copy of the starts to fill from.
         self.starts.clear();
         self.starts.resize(total + 1, 0);
-        for (i, &c) in cells.iter().enumerate() {
-            if !out(i) {
-                self.starts[c as usize] += 1;
-            }
-        }
-        for i in 1..total {
-            self.starts[i] += self.starts[i - 1];
-        }
-        self.starts[total] = n as u32;
         self.items.clear();
         self.items.resize(n + LANES - 1, u32::MAX);
         self.slot.clear();
         self.slot.resize(positions.len(), u32::MAX);
-        let mut place = |i: usize| {
-            if !out(i) {
-                let f = &mut self.starts[cells[i] as usize];
-                *f -= 1;
-                self.items[*f as usize] = i as u32;
-                self.slot[i] = *f;
-            }
-        };
-        if visit.is_empty() {
-            (0..cells.len()).rev().for_each(&mut place);
+        let pieces = if cells.len() >= PARALLEL_SORT {
+            rayon::current_num_threads().clamp(1, MAX_SORT_PIECES)
         } else {
-            visit.iter().rev().for_each(|&i| place(i as usize));
+            1
+        };
+        if pieces > 1 {
+            self.place_in_pieces(&cells, except, visit, pieces);
+            self.cells = cells;
+        } else {
+            // Counts, then each cell's end; the agents placed from the last visited back,
+            // each cell filled from its end, leaves every start where its cell begins (and
+            // each cell in visit order) without a copy of the starts to fill from.
+            for (i, &c) in cells.iter().enumerate() {
+                if !out(i) {
+                    self.starts[c as usize] += 1;
+                }
+            }
+            for i in 1..total {
+                self.starts[i] += self.starts[i - 1];
+            }
+            self.starts[total] = n as u32;
+            let mut place = |i: usize| {
+                if !out(i) {
+                    let f = &mut self.starts[cells[i] as usize];
+                    *f -= 1;
+                    self.items[*f as usize] = i as u32;
+                    self.slot[i] = *f;
+                }
+            };
+            if visit.is_empty() {
+                (0..cells.len()).rev().for_each(&mut place);
+            } else {
+                visit.iter().rev().for_each(|&i| place(i as usize));
+            }
+            self.cells = cells;
         }
-        self.cells = cells;
         // Positions in items order: one pass filling the three axes (three passes each
         // read every position again, and cost 90 instructions a point in all).
         for out in [&mut self.xs, &mut self.ys, &mut self.zs] {
@@ -275,6 +288,95 @@ impl Grid {
             .for_each(|(((x, y), z), &i)| {
                 let p = positions[i as usize];
                 (*x, *y, *z) = (p.x, p.y, p.z);
+            });
+    }
+
+    /// The counting sort's placing, in `pieces` pieces of the visiting order at once, with
+    /// the serial sort's result: cell by cell, piece by piece, each piece's agents in
+    /// visiting order. Each piece counts its agents per cell; a scan over the cells, cut
+    /// into as many runs, turns the counts into where each piece starts writing in each
+    /// cell (and the cells' starts); then every piece writes its own agents.
+    fn place_in_pieces(&mut self, cells: &[u32], except: &[bool], visit: &[u32], pieces: usize) {
+        let (len, total) = (cells.len(), self.starts.len() - 1);
+        let visited = |j: usize| {
+            if visit.is_empty() {
+                j
+            } else {
+                visit[j] as usize
+            }
+        };
+        let kept = |i: usize| except.is_empty() || !except[i];
+        let piece = len.div_ceil(pieces);
+        let run = total.div_ceil(pieces);
+        self.cursors.clear();
+        self.cursors.resize(pieces * total, 0);
+        self.cursors
+            .par_chunks_mut(total)
+            .enumerate()
+            .for_each(|(p, counts)| {
+                for j in p * piece..((p + 1) * piece).min(len) {
+                    let i = visited(j);
+                    if kept(i) {
+                        counts[cells[i] as usize] += 1;
+                    }
+                }
+            });
+        // Each run of cells: its agents, then where it begins; then each cell's start and
+        // each piece's cursor in it.
+        let cursors = Scatter::new(&mut self.cursors);
+        let in_run: Vec<u32> = (0..pieces)
+            .into_par_iter()
+            .map(|r| {
+                let mut sum = 0;
+                for c in r * run..((r + 1) * run).min(total) {
+                    for p in 0..pieces {
+                        // SAFETY: in bounds; nothing writes the cursors in this pass.
+                        sum += unsafe { cursors.read(p * total + c) };
+                    }
+                }
+                sum
+            })
+            .collect();
+        let mut begin = Vec::with_capacity(pieces);
+        let mut at = 0;
+        for &k in &in_run {
+            begin.push(at);
+            at += k;
+        }
+        let starts = Scatter::new(&mut self.starts);
+        (0..pieces).into_par_iter().for_each(|r| {
+            let mut at = begin[r];
+            for c in r * run..((r + 1) * run).min(total) {
+                // SAFETY: cell c belongs to run r alone, so these places are this task's.
+                unsafe {
+                    starts.write(c, at);
+                    for p in 0..pieces {
+                        let k = cursors.read(p * total + c);
+                        cursors.write(p * total + c, at);
+                        at += k;
+                    }
+                }
+            }
+        });
+        self.starts[total] = at;
+        let (items, slot) = (Scatter::new(&mut self.items), Scatter::new(&mut self.slot));
+        self.cursors
+            .par_chunks_mut(total)
+            .enumerate()
+            .for_each(|(p, cursor)| {
+                for j in p * piece..((p + 1) * piece).min(len) {
+                    let i = visited(j);
+                    if kept(i) {
+                        let f = &mut cursor[cells[i] as usize];
+                        // SAFETY: piece p's cursors run over places no other piece's
+                        // reach (the scan above), and each agent is visited once.
+                        unsafe {
+                            items.write(*f as usize, i as u32);
+                            slot.write(i, *f);
+                        }
+                        *f += 1;
+                    }
+                }
             });
     }
 
@@ -598,6 +700,43 @@ fn floor_i32(v: f32) -> i32 {
     if (t as f32) > v { t - 1 } else { t }
 }
 
+/// Agents from which the counting sort places them in pieces on several threads: below,
+/// the serial sort is quicker than the pieces' scan over every cell.
+const PARALLEL_SORT: usize = 8_192;
+/// At most this many pieces (each has its own counts over every cell).
+const MAX_SORT_PIECES: usize = 8;
+
+/// A slice that several threads write at once, each at places no other touches (the
+/// counting sort's scatter). Reads and writes are unchecked but for debug assertions.
+struct Scatter<T> {
+    ptr: *mut T,
+    len: usize,
+}
+
+// SAFETY: the callers' places are disjoint between threads (see `Grid::place_in_pieces`).
+unsafe impl<T: Send> Sync for Scatter<T> {}
+
+impl<T: Copy> Scatter<T> {
+    fn new(v: &mut [T]) -> Self {
+        Scatter {
+            ptr: v.as_mut_ptr(),
+            len: v.len(),
+        }
+    }
+
+    /// SAFETY: `i < len`, and no other thread writes place i meanwhile.
+    unsafe fn read(&self, i: usize) -> T {
+        debug_assert!(i < self.len);
+        unsafe { self.ptr.add(i).read() }
+    }
+
+    /// SAFETY: `i < len`, and no other thread reads or writes place i meanwhile.
+    unsafe fn write(&self, i: usize, v: T) {
+        debug_assert!(i < self.len);
+        unsafe { self.ptr.add(i).write(v) }
+    }
+}
+
 /// Candidates a query holds: with more, it keeps the k nearest so far and goes on.
 const COLLECT: usize = 64;
 
@@ -906,6 +1045,64 @@ mod tests {
                 assert_eq!(a[..la], b[..lb], "point {i}");
                 assert!(!a[..la].contains(&(i as u32)));
             }
+        }
+    }
+
+    #[test]
+    fn sorting_in_pieces_on_several_threads_gives_the_serial_sort() {
+        // From PARALLEL_SORT agents the counting sort places them in one piece per
+        // thread; every cell must still list its agents in visiting order, and the
+        // starts, the places and the answers must be those of one thread. A sparse cloud
+        // and a crowd (thin cells), visited by a shuffle of the ids, a tenth left out.
+        for (seed, n, size) in [(21, 20_000, 2.0), (22, 3 * PARALLEL_SORT, 0.05)] {
+            let pts = cloud(seed, n, size);
+            let mut visit: Vec<u32> = (0..n as u32).collect();
+            let mut rng = crate::math::Rng::new(seed, 1, 1);
+            for k in (1..n).rev() {
+                visit.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+            }
+            let except: Vec<bool> = (0..n).map(|i| i % 10 == 3).collect();
+            let build = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let mut g = Grid::default();
+                    g.build_visiting(&pts, 0.15, &except, &visit);
+                    g
+                })
+            };
+            let one = build(1);
+            assert_eq!(one.split > 1, size < 1.0, "the crowd has thin cells");
+            for threads in [2, 3, 8] {
+                let g = build(threads);
+                assert_eq!(
+                    (g.dims, g.split),
+                    (one.dims, one.split),
+                    "{threads} threads"
+                );
+                assert_eq!(g.starts, one.starts, "{threads} threads");
+                assert_eq!(g.items, one.items, "{threads} threads");
+                assert_eq!(g.slot, one.slot, "{threads} threads");
+            }
+            // Within each cell, in visiting order.
+            let rank: Vec<usize> = {
+                let mut r = vec![0; n];
+                for (k, &i) in visit.iter().enumerate() {
+                    r[i as usize] = k;
+                }
+                r
+            };
+            for c in one.starts.windows(2) {
+                let run = &one.items[c[0] as usize..c[1] as usize];
+                assert!(
+                    run.windows(2)
+                        .all(|w| rank[w[0] as usize] < rank[w[1] as usize])
+                );
+            }
+            assert!(one.items[..one.len()].iter().all(|&i| !except[i as usize]));
+            assert_eq!(one.len(), except.iter().filter(|&&x| !x).count());
         }
     }
 
