@@ -409,6 +409,20 @@ impl Grid {
     /// `skip`; returns how many. They are listed in the order of the walk, and ties at the
     /// k-th distance go to the first walked: a fixed function of `p` and the grid.
     pub fn nearest(&self, p: Vec3, radius: f32, k: usize, skip: usize, out: &mut [u32]) -> usize {
+        self.nearest_scanning(p, radius, k, skip, out, wide_collect())
+    }
+
+    /// [`Grid::nearest`], long runs scanned and candidates ranked with AVX-512 if `wide`
+    /// (only where the CPU has it).
+    fn nearest_scanning(
+        &self,
+        p: Vec3,
+        radius: f32,
+        k: usize,
+        skip: usize,
+        out: &mut [u32],
+        wide: bool,
+    ) -> usize {
         let k = k.min(MAX_K).min(out.len());
         if k == 0 || self.len() == 0 {
             return 0;
@@ -421,6 +435,7 @@ impl Grid {
             p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
             skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
             k,
+            wide,
         };
         let mut found = Found::default();
         if self.cell >= radius {
@@ -627,6 +642,11 @@ impl Grid {
             .min(p.z - lz)
             .min(lz + self.cell - p.z)
             .max(0.0);
+        // Each ring's rows are first listed, then collected: the chord's arithmetic and the
+        // two reads of where its cells begin are then independent from row to row, instead
+        // of waiting each time for the last row's scan (whose end the branch predictor
+        // cannot foresee).
+        let mut runs = Runs::default();
         for q in 0.. {
             if q > 0 {
                 let gap = (q - 1) as f32 * self.cell + margin;
@@ -641,7 +661,7 @@ impl Grid {
                 if dz2 >= r2 {
                     continue;
                 }
-                let mut row = |y: i32| self.row(p, y, z, dz2, r2, scan, found);
+                let mut row = |y: i32| self.row(p, y, z, dz2, r2, scan, found, &mut runs);
                 if (z - c.z).abs() == q {
                     for y in (c.y - q).max(0)..=(c.y + q).min(d.y - 1) {
                         row(y);
@@ -656,14 +676,26 @@ impl Grid {
                     }
                 }
             }
+            runs.flush(scan, r2, found);
         }
     }
 
-    /// Collects row (y, z) over the chord of the sphere of squared radius `r2` through it
-    /// (`dz2`: the squared distance from p to the row's z slab).
+    /// Lists in `runs` row (y, z) over the chord of the sphere of squared radius `r2`
+    /// through it (`dz2`: the squared distance from p to the row's z slab), collecting
+    /// the runs listed so far when `runs` is full.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn row(&self, p: Vec3, y: i32, z: i32, dz2: f32, r2: f32, scan: &Scan, found: &mut Found) {
+    fn row(
+        &self,
+        p: Vec3,
+        y: i32,
+        z: i32,
+        dz2: f32,
+        r2: f32,
+        scan: &Scan,
+        found: &mut Found,
+        runs: &mut Runs,
+    ) {
         let (d, o) = (self.dims, self.origin);
         let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
         if dyz2 < r2 {
@@ -673,9 +705,10 @@ impl Grid {
             let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
             let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
             let row = (d.x * (y + d.y * z)) as usize;
-            let s = self.starts[row + a] as usize;
-            let e = self.starts[row + b + 1] as usize;
-            scan.collect(s, e, r2, found);
+            runs.push((self.starts[row + a], self.starts[row + b + 1]));
+            if runs.len == RUNS {
+                runs.flush(scan, r2, found);
+            }
         }
     }
 
@@ -698,6 +731,33 @@ impl Grid {
 fn floor_i32(v: f32) -> i32 {
     let t = v as i32;
     if (t as f32) > v { t - 1 } else { t }
+}
+
+/// Rows a ring walk lists before collecting them.
+const RUNS: usize = 32;
+
+/// Runs `(start, end)` of the sorted arrays listed for collecting, in walk order.
+#[derive(Default)]
+struct Runs {
+    runs: [(u32, u32); RUNS],
+    len: usize,
+}
+
+impl Runs {
+    #[inline(always)]
+    fn push(&mut self, run: (u32, u32)) {
+        self.runs[self.len] = run;
+        self.len += 1;
+    }
+
+    /// Collects every run listed, in order, and empties the list.
+    #[inline(always)]
+    fn flush(&mut self, scan: &Scan, r2: f32, found: &mut Found) {
+        for &(s, e) in &self.runs[..self.len] {
+            scan.collect(s as usize, e as usize, r2, found);
+        }
+        self.len = 0;
+    }
 }
 
 /// Agents from which the counting sort places them in pieces on several threads: below,
@@ -758,17 +818,39 @@ const PACKED: [[u32; LANES]; 16] = {
     t
 };
 
+/// Candidates the AVX-512 scan tests together.
+const WIDE_LANES: usize = 16;
+/// Runs at least this long take the AVX-512 scan; shorter ones (a sparse cloud's rows hold
+/// two or three agents) stay in the inlined four-lane loop, which costs no call.
+const WIDE_RUN: usize = 8;
+
+/// Whether this CPU takes the AVX-512 scan (`collect_wide`) and ranking
+/// (`ranked_below_wide`): the same candidates in the same order as four lanes at a time,
+/// so the same answers on every machine.
+#[inline]
+fn wide_collect() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// Places in the sorted arrays of candidates collected, in the order of the scan.
 struct Found {
-    /// `LANES` spare entries: each group writes four and keeps as many as it found.
-    slots: [u32; COLLECT + LANES],
+    /// `WIDE_LANES` spare entries: each group writes all its lanes and keeps as many as it
+    /// found.
+    slots: [u32; COLLECT + WIDE_LANES],
     len: usize,
 }
 
 impl Default for Found {
     fn default() -> Self {
         Found {
-            slots: [0; COLLECT + LANES],
+            slots: [0; COLLECT + WIDE_LANES],
             len: 0,
         }
     }
@@ -784,6 +866,8 @@ struct Scan<'a> {
     skip_slot: u32,
     /// Neighbours wanted (at most `MAX_K`).
     k: usize,
+    /// Long runs are scanned, and candidates ranked, with AVX-512 (`wide_collect`).
+    wide: bool,
 }
 
 impl Scan<'_> {
@@ -792,6 +876,11 @@ impl Scan<'_> {
     /// without a branch per hit; when `found` is full it keeps the k nearest and goes on.
     #[inline(always)]
     fn collect(&self, a: usize, b: usize, r2: f32, found: &mut Found) {
+        #[cfg(target_arch = "x86_64")]
+        if self.wide && b - a >= WIDE_RUN {
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+            return unsafe { self.collect_wide(a, b, r2, found) };
+        }
         let (px, py, pz) = self.p;
         let end = b + LANES - 1;
         let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
@@ -818,6 +907,66 @@ impl Scan<'_> {
             }
             found.len += hits.count_ones() as usize;
             l += LANES;
+        }
+    }
+
+    /// [`Scan::collect`] sixteen candidates at a time with AVX-512: the same squared
+    /// distances (the same operations in the same order: no fused multiply-add), the same
+    /// comparison, and the hits packed into `found` in the same order, so the same
+    /// candidates in the same order. A full `found` keeps the k nearest at other points
+    /// than the four-lane scan, which changes nothing: the k nearest by distance and order
+    /// of the candidates so far, and then of those and the rest, are the k nearest of all.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn collect_wide(&self, a: usize, b: usize, r2: f32, found: &mut Found) {
+        use std::arch::x86_64::*;
+        assert!(b <= self.xs.len() && b <= self.ys.len() && b <= self.zs.len());
+        let (px, py, pz) = (
+            _mm512_set1_ps(self.p.0.x),
+            _mm512_set1_ps(self.p.1.x),
+            _mm512_set1_ps(self.p.2.x),
+        );
+        let r2 = _mm512_set1_ps(r2);
+        let lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let mut l = a;
+        while l < b {
+            if found.len > COLLECT - WIDE_LANES {
+                self.keep_nearest(found);
+            }
+            let valid: __mmask16 = if b - l >= WIDE_LANES {
+                u16::MAX
+            } else {
+                (1u16 << (b - l)) - 1
+            };
+            // SAFETY: lanes past the run are masked out of the loads, so only places
+            // below b ≤ the arrays' lengths (asserted above) are read.
+            let (x, y, z) = unsafe {
+                (
+                    _mm512_maskz_loadu_ps(valid, self.xs.as_ptr().add(l)),
+                    _mm512_maskz_loadu_ps(valid, self.ys.as_ptr().add(l)),
+                    _mm512_maskz_loadu_ps(valid, self.zs.as_ptr().add(l)),
+                )
+            };
+            let (dx, dy, dz) = (
+                _mm512_sub_ps(x, px),
+                _mm512_sub_ps(y, py),
+                _mm512_sub_ps(z, pz),
+            );
+            let d2 = _mm512_add_ps(
+                _mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)),
+                _mm512_mul_ps(dz, dz),
+            );
+            let mut hits = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(valid, d2, r2);
+            let own = self.skip_slot.wrapping_sub(l as u32);
+            hits &= !(((own < WIDE_LANES as u32) as u16) << (own & 15));
+            let places = _mm512_add_epi32(_mm512_set1_epi32(l as i32), lane);
+            let packed = _mm512_maskz_compress_epi32(hits, places);
+            let out = &mut found.slots[found.len..found.len + WIDE_LANES];
+            // SAFETY: `out` holds sixteen u32s, the store's width.
+            unsafe { _mm512_storeu_si512(out.as_mut_ptr().cast(), packed) };
+            found.len += hits.count_ones() as usize;
+            l += WIDE_LANES;
         }
     }
 
@@ -858,6 +1007,13 @@ impl Scan<'_> {
             *d = dx * dx + dy * dy + dz * dz;
         }
         let kept = match n.div_ceil(LANES) {
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+            #[cfg(target_arch = "x86_64")]
+            g if self.wide && g <= 2 * LANES => unsafe { ranked_below_wide::<2>(&d2, n, k) },
+            #[cfg(target_arch = "x86_64")]
+            g if self.wide && g <= 3 * LANES => unsafe { ranked_below_wide::<3>(&d2, n, k) },
+            #[cfg(target_arch = "x86_64")]
+            _ if self.wide => unsafe { ranked_below_wide::<4>(&d2, n, k) },
             5 => ranked_below::<5>(&d2, n, k),
             6 => ranked_below::<6>(&d2, n, k),
             7 => ranked_below::<7>(&d2, n, k),
@@ -913,6 +1069,37 @@ fn ranked_below<const G: usize>(d2: &[f32], n: usize, k: usize) -> u64 {
     below & ((1u64 << n) - 1)
 }
 
+/// [`ranked_below`] with AVX-512, for up to `R` × 16 (at most 64) candidates: the
+/// distances in `R` registers, each candidate's comparison with all of them one mask per
+/// register, the counts integers. The same comparisons, so the same bits set; and cheap
+/// enough that a full `found` (up to 64) is ranked too rather than selected.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn ranked_below_wide<const R: usize>(d2: &[f32; COLLECT + LANES], n: usize, k: usize) -> u64 {
+    use std::arch::x86_64::*;
+    const { assert!(R * WIDE_LANES <= COLLECT && R * WIDE_LANES <= 64) };
+    debug_assert!(n <= R * WIDE_LANES);
+    // SAFETY: every load lies within `d2` (asserted above).
+    let groups: [__m512; R] =
+        std::array::from_fn(|r| unsafe { _mm512_loadu_ps(d2.as_ptr().add(r * WIDE_LANES)) });
+    let one = _mm512_set1_epi32(1);
+    let mut nearer = [_mm512_setzero_si512(); R];
+    for &di in &d2[..n] {
+        let di = _mm512_set1_ps(di);
+        for (c, &dj) in nearer.iter_mut().zip(&groups) {
+            let m = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(di, dj);
+            *c = _mm512_mask_add_epi32(*c, m, *c, one);
+        }
+    }
+    let k = _mm512_set1_epi32(k as i32);
+    let mut below = 0u64;
+    for (r, &c) in nearer.iter().enumerate() {
+        below |= (_mm512_cmplt_epi32_mask(c, k) as u64) << (r * WIDE_LANES);
+    }
+    // (n = 64 keeps every bit.)
+    below & (u64::MAX >> (64 - n))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -960,8 +1147,11 @@ mod tests {
         // Candidates on a coarse lattice (many exact ties at every distance) and off it,
         // for every count up to a full `Found` and several k: the kept places must be the
         // k first of the candidates sorted by (distance, order found), in the order found.
+        // Ranked four lanes at a time and, where the CPU has AVX-512, sixteen.
         let mut rng = Rng::new(7, 3, 1);
-        for trial in 0..4000 {
+        for trial in 0..8000 {
+            let wide = trial % 2 == 1 && wide_collect();
+            let trial = trial / 2;
             let n = 2 + trial % (COLLECT - 1);
             let k = [1, 4, 7, 16, 16, 16, 24, 32][trial % 8].min(n - 1);
             let coarse = trial % 2 == 0;
@@ -984,6 +1174,7 @@ mod tests {
                 p: (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO),
                 skip_slot: u32::MAX,
                 k,
+                wide,
             };
             let mut found = Found::default();
             // Collected in a scrambled order, as a walk over cells would.
@@ -1044,6 +1235,40 @@ mod tests {
                 let lb = fresh.nearest(moved[i], 0.2, 16, i, &mut b);
                 assert_eq!(a[..la], b[..lb], "point {i}");
                 assert!(!a[..la].contains(&(i as u32)));
+            }
+        }
+    }
+
+    #[test]
+    fn the_wide_scan_finds_what_the_four_lane_scan_finds() {
+        // Where the CPU has AVX-512, long runs are scanned sixteen candidates at a time
+        // and candidates ranked sixteen at a time: the same lists in the same order as
+        // four at a time, in a sparse cloud, a middling one, a crowd (thin cells) and a
+        // lattice full of ties, for k from 1 to 32 (a full buffer of candidates kept at
+        // other points).
+        if !wide_collect() {
+            eprintln!("skipped: this CPU has no AVX-512");
+            return;
+        }
+        let lattice: Vec<Vec3> = (0..4096)
+            .map(|i| Vec3::new((i % 16) as f32, (i / 16 % 16) as f32, (i / 256) as f32) * 0.01)
+            .collect();
+        let clouds = [
+            (cloud(31, 4000, 2.0), 0.15),
+            (cloud(32, 4000, 0.5), 0.15),
+            (cloud(33, 20_000, 0.1), 0.15),
+            (lattice, 0.035),
+        ];
+        for (c, (pts, r)) in clouds.iter().enumerate() {
+            let mut g = Grid::default();
+            g.build(pts, *r);
+            let (mut a, mut b) = ([0u32; MAX_K], [0u32; MAX_K]);
+            for k in [1, 7, 16, 32] {
+                for i in (0..pts.len()).step_by(13) {
+                    let la = g.nearest_scanning(pts[i], *r, k, i, &mut a, true);
+                    let lb = g.nearest_scanning(pts[i], *r, k, i, &mut b, false);
+                    assert_eq!(a[..la], b[..lb], "cloud {c}, k {k}, point {i}");
+                }
             }
         }
     }
