@@ -753,9 +753,7 @@ impl Runs {
     /// Collects every run listed, in order, and empties the list.
     #[inline(always)]
     fn flush(&mut self, scan: &Scan, r2: f32, found: &mut Found) {
-        for &(s, e) in &self.runs[..self.len] {
-            scan.collect(s as usize, e as usize, r2, found);
-        }
+        scan.collect_runs(&self.runs[..self.len], r2, found);
         self.len = 0;
     }
 }
@@ -820,9 +818,6 @@ const PACKED: [[u32; LANES]; 16] = {
 
 /// Candidates the AVX-512 scan tests together.
 const WIDE_LANES: usize = 16;
-/// Runs at least this long take the AVX-512 scan; shorter ones (a sparse cloud's rows hold
-/// two or three agents) stay in the inlined four-lane loop, which costs no call.
-const WIDE_RUN: usize = 8;
 
 /// Whether this CPU takes the AVX-512 scan (`collect_wide`) and ranking
 /// (`ranked_below_wide`): the same candidates in the same order as four lanes at a time,
@@ -844,6 +839,9 @@ struct Found {
     /// `WIDE_LANES` spare entries: each group writes all its lanes and keeps as many as it
     /// found.
     slots: [u32; COLLECT + WIDE_LANES],
+    /// Their squared distances, where the AVX-512 scan found them (the four-lane scan
+    /// leaves them to `Scan::keep_nearest`).
+    d2: [f32; COLLECT + WIDE_LANES],
     len: usize,
 }
 
@@ -851,6 +849,7 @@ impl Default for Found {
     fn default() -> Self {
         Found {
             slots: [0; COLLECT + WIDE_LANES],
+            d2: [0.0; COLLECT + WIDE_LANES],
             len: 0,
         }
     }
@@ -876,11 +875,6 @@ impl Scan<'_> {
     /// without a branch per hit; when `found` is full it keeps the k nearest and goes on.
     #[inline(always)]
     fn collect(&self, a: usize, b: usize, r2: f32, found: &mut Found) {
-        #[cfg(target_arch = "x86_64")]
-        if self.wide && b - a >= WIDE_RUN {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
-            return unsafe { self.collect_wide(a, b, r2, found) };
-        }
         let (px, py, pz) = self.p;
         let end = b + LANES - 1;
         let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
@@ -965,6 +959,9 @@ impl Scan<'_> {
             let out = &mut found.slots[found.len..found.len + WIDE_LANES];
             // SAFETY: `out` holds sixteen u32s, the store's width.
             unsafe { _mm512_storeu_si512(out.as_mut_ptr().cast(), packed) };
+            let out = &mut found.d2[found.len..found.len + WIDE_LANES];
+            // SAFETY: `out` holds sixteen f32s, the store's width.
+            unsafe { _mm512_storeu_ps(out.as_mut_ptr(), _mm512_maskz_compress_ps(hits, d2)) };
             found.len += hits.count_ones() as usize;
             l += WIDE_LANES;
         }
@@ -979,14 +976,36 @@ impl Scan<'_> {
             runs[n] = (s, e);
             n += (slab < r2) as usize;
         }
-        for &(s, e) in &runs[..n] {
+        self.collect_runs(&runs[..n], r2, found);
+    }
+
+    /// Collects the runs `(start, end)` in order: with AVX-512 in one call where the CPU
+    /// has it, else four lanes at a time.
+    #[inline(always)]
+    fn collect_runs(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
+        #[cfg(target_arch = "x86_64")]
+        if self.wide {
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+            return unsafe { self.collect_runs_wide(runs, r2, found) };
+        }
+        for &(s, e) in runs {
             self.collect(s as usize, e as usize, r2, found);
         }
     }
 
+    /// [`Scan::collect_runs`] with AVX-512: every run sixteen candidates at a time (a short
+    /// run is one masked group), and their squared distances kept for `keep_nearest`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn collect_runs_wide(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
+        for &(s, e) in runs {
+            self.collect_wide(s as usize, e as usize, r2, found);
+        }
+    }
+
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
-    /// k-th distance going to the first. Their squared distances are worked out again as
-    /// `collect` does (so the same bits). Up to `RANKED` candidates (the usual case): each
+    /// k-th distance going to the first. Their squared distances are the AVX-512 scan's,
+    /// or worked out again as `collect` does (so the same bits). Up to `RANKED` candidates (the usual case): each
     /// one's rank, the number of candidates strictly nearer, counted for four at a time
     /// against every other, with no branch on the values (a sort's comparisons
     /// mispredict) and no chain of dependent steps; exactly k ranked below k are the k
@@ -1001,10 +1020,14 @@ impl Scan<'_> {
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
         // ∞: no candidate, nearer than none.
         let mut d2 = [f32::INFINITY; COLLECT + LANES];
-        for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
-            let s = s as usize;
-            let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
-            *d = dx * dx + dy * dy + dz * dz;
+        if self.wide {
+            d2[..n].copy_from_slice(&found.d2[..n]);
+        } else {
+            for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
+                let s = s as usize;
+                let (dx, dy, dz) = (self.xs[s] - px, self.ys[s] - py, self.zs[s] - pz);
+                *d = dx * dx + dy * dy + dz * dz;
+            }
         }
         let kept = match n.div_ceil(LANES) {
             // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
@@ -1024,8 +1047,9 @@ impl Scan<'_> {
         let mut w = 0;
         if kept.count_ones() as usize == k {
             // In place: the write position never passes the read position.
-            for r in 0..n {
+            for (r, &d) in d2[..n].iter().enumerate() {
                 found.slots[w] = found.slots[r];
+                found.d2[w] = d;
                 w += (kept >> r) as usize & 1;
             }
         } else {
@@ -1035,6 +1059,7 @@ impl Scan<'_> {
             for (r, &d) in d2[..n].iter().enumerate() {
                 let tie = (d == kth) & (ties > 0);
                 found.slots[w] = found.slots[r];
+                found.d2[w] = d;
                 w += ((d < kth) | tie) as usize;
                 ties -= tie as usize;
             }
@@ -1182,6 +1207,11 @@ mod tests {
                 *s = ((i * 37 + trial) % n) as u32;
             }
             found.len = n;
+            // With their squared distances, as the AVX-512 scan leaves them.
+            for (d, &s) in found.d2.iter_mut().zip(&found.slots[..n]) {
+                let p = pts[s as usize];
+                *d = p.x * p.x + p.y * p.y + p.z * p.z;
+            }
             let order = found.slots;
             scan.keep_nearest(&mut found);
             let mut want: Vec<(f32, usize)> = (0..n)
