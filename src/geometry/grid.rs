@@ -562,7 +562,7 @@ impl Grid {
             }
         }
         let cells = (hi - lo + IVec3::ONE).element_product() as f32 / self.split as f32;
-        self.kth_distance_cubed(k, count, cells).cbrt()
+        rough_cbrt(self.kth_distance_cubed(k, count, cells))
     }
 
     /// The cube of `kth_distance_guess`'s distance for `count` points in `cells` whole
@@ -618,7 +618,7 @@ impl Grid {
         let cubed = self.kth_distance_cubed(scan.k, count, cells);
         if cubed < r2 * r2.sqrt() {
             // (Never past the radius, whatever the cube root's rounding.)
-            let guess = cubed.cbrt();
+            let guess = rough_cbrt(cubed);
             scan.collect_rows(&rows[..m], (guess * guess).min(r2), found);
             if found.len >= scan.k {
                 return;
@@ -723,6 +723,16 @@ impl Grid {
         let d = max(max(lo - v, v - (lo + self.cell)), 0.0);
         d * d
     }
+}
+
+/// The cube root of `x` (positive, or infinite) to about 0.2 %: the exponent divided by
+/// three in the bits, then one Newton step. For the k-th distance guesses, which only
+/// bound a walk (any bound gives the same answer; the guess's margin is 12 %), where
+/// libm's `cbrtf` was 3 % of a crowd's time.
+#[inline(always)]
+fn rough_cbrt(x: f32) -> f32 {
+    let y = f32::from_bits(x.to_bits() / 3 + 0x2A51_67AF);
+    (2.0 * y + x / (y * y)) * (1.0 / 3.0)
 }
 
 /// `floor` as an integer without a libm call (x86-64 without SSE4.1 has no floor
@@ -1301,6 +1311,16 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_rough_cube_root_is_within_its_stated_error() {
+        for i in 0..10_000 {
+            let x = 1e-12 * 1.0031f32.powi(i);
+            let (r, exact) = (rough_cbrt(x), x.cbrt());
+            assert!((r / exact - 1.0).abs() < 2e-3, "{x}: {r} against {exact}");
+        }
+        assert_eq!(rough_cbrt(f32::INFINITY), f32::INFINITY);
     }
 
     #[test]
