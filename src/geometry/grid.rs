@@ -298,15 +298,9 @@ impl Grid {
     /// cell (and the cells' starts); then every piece writes its own agents.
     fn place_in_pieces(&mut self, cells: &[u32], except: &[bool], visit: &[u32], pieces: usize) {
         let (len, total) = (cells.len(), self.starts.len() - 1);
-        let visited = |j: usize| {
-            if visit.is_empty() {
-                j
-            } else {
-                visit[j] as usize
-            }
-        };
-        let kept = |i: usize| except.is_empty() || !except[i];
         let piece = len.div_ceil(pieces);
+        // Piece p's places in the visiting order.
+        let range = |p: usize| p * piece..((p + 1) * piece).min(len);
         let run = total.div_ceil(pieces);
         self.cursors.clear();
         self.cursors.resize(pieces * total, 0);
@@ -314,12 +308,7 @@ impl Grid {
             .par_chunks_mut(total)
             .enumerate()
             .for_each(|(p, counts)| {
-                for j in p * piece..((p + 1) * piece).min(len) {
-                    let i = visited(j);
-                    if kept(i) {
-                        counts[cells[i] as usize] += 1;
-                    }
-                }
+                for_each_placed(range(p), cells, except, visit, |_, c| counts[c] += 1);
             });
         // Each run of cells: its agents, then where it begins; then each cell's start and
         // each piece's cursor in it.
@@ -364,19 +353,16 @@ impl Grid {
             .par_chunks_mut(total)
             .enumerate()
             .for_each(|(p, cursor)| {
-                for j in p * piece..((p + 1) * piece).min(len) {
-                    let i = visited(j);
-                    if kept(i) {
-                        let f = &mut cursor[cells[i] as usize];
-                        // SAFETY: piece p's cursors run over places no other piece's
-                        // reach (the scan above), and each agent is visited once.
-                        unsafe {
-                            items.write(*f as usize, i as u32);
-                            slot.write(i, *f);
-                        }
-                        *f += 1;
+                for_each_placed(range(p), cells, except, visit, |i, c| {
+                    let f = &mut cursor[c];
+                    // SAFETY: piece p's cursors run over places no other piece's reach (the
+                    // scan above), and each agent is visited once.
+                    unsafe {
+                        items.write(*f as usize, i as u32);
+                        slot.write(i, *f);
                     }
-                }
+                    *f += 1;
+                })
             });
     }
 
@@ -741,6 +727,28 @@ fn rough_cbrt(x: f32) -> f32 {
 fn floor_i32(v: f32) -> i32 {
     let t = v as i32;
     if (t as f32) > v { t - 1 } else { t }
+}
+
+/// Calls `f(i, cell)` for the agents visited at places `range` of `visit` (empty: agent
+/// j is the j-th visited) that go into the grid (not flagged in `except`), in order.
+#[inline(always)]
+fn for_each_placed(
+    range: std::ops::Range<usize>,
+    cells: &[u32],
+    except: &[bool],
+    visit: &[u32],
+    mut f: impl FnMut(usize, usize),
+) {
+    for j in range {
+        let i = if visit.is_empty() {
+            j
+        } else {
+            visit[j] as usize
+        };
+        if except.is_empty() || !except[i] {
+            f(i, cells[i] as usize);
+        }
+    }
 }
 
 /// Rows a ring walk lists before collecting them.
