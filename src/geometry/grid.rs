@@ -398,8 +398,8 @@ impl Grid {
         self.nearest_scanning(p, radius, k, skip, out, wide_collect())
     }
 
-    /// [`Grid::nearest`], long runs scanned and candidates ranked with AVX-512 if `wide`
-    /// (only where the CPU has it).
+    /// [`Grid::nearest`], runs scanned and candidates ranked with AVX-512 if `wide` (only
+    /// where the CPU has it).
     fn nearest_scanning(
         &self,
         p: Vec3,
@@ -783,32 +783,35 @@ const PARALLEL_SORT: usize = 8_192;
 const MAX_SORT_PIECES: usize = 8;
 
 /// A slice that several threads write at once, each at places no other touches (the
-/// counting sort's scatter). Reads and writes are unchecked but for debug assertions.
-struct Scatter<T> {
+/// counting sort's scatter). Places are bounds-checked; that no two threads touch the
+/// same place is the callers' to keep.
+struct Scatter<'a, T> {
     ptr: *mut T,
     len: usize,
+    _slice: std::marker::PhantomData<&'a mut [T]>,
 }
 
 // SAFETY: the callers' places are disjoint between threads (see `Grid::place_in_pieces`).
-unsafe impl<T: Send> Sync for Scatter<T> {}
+unsafe impl<T: Send> Sync for Scatter<'_, T> {}
 
-impl<T: Copy> Scatter<T> {
-    fn new(v: &mut [T]) -> Self {
+impl<'a, T: Copy> Scatter<'a, T> {
+    fn new(v: &'a mut [T]) -> Self {
         Scatter {
             ptr: v.as_mut_ptr(),
             len: v.len(),
+            _slice: std::marker::PhantomData,
         }
     }
 
-    /// SAFETY: `i < len`, and no other thread writes place i meanwhile.
+    /// SAFETY: no other thread writes place i meanwhile.
     unsafe fn read(&self, i: usize) -> T {
-        debug_assert!(i < self.len);
+        assert!(i < self.len);
         unsafe { self.ptr.add(i).read() }
     }
 
-    /// SAFETY: `i < len`, and no other thread reads or writes place i meanwhile.
+    /// SAFETY: no other thread reads or writes place i meanwhile.
     unsafe fn write(&self, i: usize, v: T) {
-        debug_assert!(i < self.len);
+        assert!(i < self.len);
         unsafe { self.ptr.add(i).write(v) }
     }
 }
@@ -883,7 +886,7 @@ struct Scan<'a> {
     skip_slot: u32,
     /// Neighbours wanted (at most `MAX_K`).
     k: usize,
-    /// Long runs are scanned, and candidates ranked, with AVX-512 (`wide_collect`).
+    /// Runs are scanned, and candidates ranked, with AVX-512 (`wide_collect`).
     wide: bool,
 }
 
@@ -1023,8 +1026,9 @@ impl Scan<'_> {
 
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
     /// k-th distance going to the first. Their squared distances are the AVX-512 scan's,
-    /// or worked out again as `collect` does (so the same bits). Up to `RANKED` candidates (the usual case): each
-    /// one's rank, the number of candidates strictly nearer, counted for four at a time
+    /// or worked out again as `collect` does (so the same bits). Up to `RANKED` candidates
+    /// (the usual case; with AVX-512, all): each one's rank, the number of candidates
+    /// strictly nearer, counted for four (or sixteen) at a time
     /// against every other, with no branch on the values (a sort's comparisons
     /// mispredict) and no chain of dependent steps; exactly k ranked below k are the k
     /// nearest. More, or a tie at the k-th distance (then more than k rank below k): the
