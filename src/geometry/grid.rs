@@ -218,9 +218,6 @@ impl Grid {
     /// Counting sort of the agents by cell, in the order of `visit` (empty: by index),
     /// leaving out those flagged in `except`.
     fn sort(&mut self, positions: &[Vec3], except: &[bool], visit: &[u32]) {
-        // `except` is empty in shots without hidden agents: one test, hoisted out of the loops.
-        let some = !except.is_empty();
-        let out = |i: usize| some && except[i];
         let n = positions.len() - except.iter().filter(|&&x| x).count();
         let total = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let mut cells = std::mem::take(&mut self.cells);
@@ -249,28 +246,21 @@ impl Grid {
             // Counts, then each cell's end; the agents placed from the last visited back,
             // each cell filled from its end, leaves every start where its cell begins (and
             // each cell in visit order) without a copy of the starts to fill from.
-            for (i, &c) in cells.iter().enumerate() {
-                if !out(i) {
-                    self.starts[c as usize] += 1;
-                }
-            }
+            // (Counted by index: the order does not matter there.)
+            for_each_placed(0..cells.len(), &cells, except, &[], |_, c| {
+                self.starts[c] += 1
+            });
             for i in 1..total {
                 self.starts[i] += self.starts[i - 1];
             }
             self.starts[total] = n as u32;
-            let mut place = |i: usize| {
-                if !out(i) {
-                    let f = &mut self.starts[cells[i] as usize];
-                    *f -= 1;
-                    self.items[*f as usize] = i as u32;
-                    self.slot[i] = *f;
-                }
-            };
-            if visit.is_empty() {
-                (0..cells.len()).rev().for_each(&mut place);
-            } else {
-                visit.iter().rev().for_each(|&i| place(i as usize));
-            }
+            let (starts, items, slot) = (&mut self.starts, &mut self.items, &mut self.slot);
+            for_each_placed((0..cells.len()).rev(), &cells, except, visit, |i, c| {
+                let f = &mut starts[c];
+                *f -= 1;
+                items[*f as usize] = i as u32;
+                slot[i] = *f;
+            });
             self.cells = cells;
         }
         // Positions in items order: one pass filling the three axes (three passes each
@@ -729,17 +719,17 @@ fn floor_i32(v: f32) -> i32 {
     if (t as f32) > v { t - 1 } else { t }
 }
 
-/// Calls `f(i, cell)` for the agents visited at places `range` of `visit` (empty: agent
-/// j is the j-th visited) that go into the grid (not flagged in `except`), in order.
+/// Calls `f(i, cell)` for the agents visited at `places` of `visit` (empty: agent j is the
+/// j-th visited) that go into the grid (not flagged in `except`), in the order given.
 #[inline(always)]
 fn for_each_placed(
-    range: std::ops::Range<usize>,
+    places: impl Iterator<Item = usize>,
     cells: &[u32],
     except: &[bool],
     visit: &[u32],
     mut f: impl FnMut(usize, usize),
 ) {
-    for j in range {
+    for j in places {
         let i = if visit.is_empty() {
             j
         } else {

@@ -11,10 +11,10 @@
 //! the order stays close): agents near each other in space sit near each other in memory,
 //! so every pass — records, lists, steps — reads its neighbours from cache, and each thread
 //! works on its own part of space in every pass, instead of reading what another core
-//! wrote the pass before. An agent's
-//! index (where it is stored) thus changes as it moves; its *id* (its place in the shot's
-//! order) does not: ids seed its random numbers, name it in the caches and checkpoints,
-//! order the grid's cells and the lists, so no result depends on where it is stored.
+//! wrote the pass before. An agent's index (where it is stored) thus changes as it moves;
+//! its *id* (its place in the shot's order) does not: ids seed its random numbers, name it
+//! in the caches and checkpoints, order the grid's cells and the lists, so no result
+//! depends on where it is stored.
 
 use super::agent_bytes::AgentBytes;
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
