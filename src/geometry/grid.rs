@@ -241,7 +241,6 @@ impl Grid {
         };
         if pieces > 1 {
             self.place_in_pieces(&cells, except, visit, pieces);
-            self.cells = cells;
         } else {
             // Counts, then each cell's end; the agents placed from the last visited back,
             // each cell filled from its end, leaves every start where its cell begins (and
@@ -261,8 +260,8 @@ impl Grid {
                 items[*f as usize] = i as u32;
                 slot[i] = *f;
             });
-            self.cells = cells;
         }
+        self.cells = cells;
         // Positions in items order: one pass filling the three axes (three passes each
         // read every position again, and cost 90 instructions a point in all).
         for out in [&mut self.xs, &mut self.ys, &mut self.zs] {
