@@ -607,16 +607,47 @@ impl Grid {
     /// in y and z, each trimmed to the chord of the sphere of `radius` through it, out to
     /// `radius`.
     fn walk(&self, p: Vec3, c: IVec3, radius: f32, scan: &Scan, found: &mut Found) {
-        let (d, o) = (self.dims, self.origin);
         let r2 = radius * radius;
-        // Distance from p to the nearest y or z face of its row: ring q + 1 and beyond lie
-        // at least q cells plus this far away.
+        let margin = self.row_margin(p, c);
+        // Where ring 2 lies beyond reach (a crowd's guess is about two thirds of a cell),
+        // rings 0 and 1 are listed without a branch per row (`near_rows`), the rows the
+        // ring walk below would list, in its order.
+        let gap2 = self.cell + margin;
+        if gap2 >= radius || gap2 * gap2 >= r2 {
+            let ring1 = !(margin >= radius || margin * margin >= r2);
+            let mut runs = Runs::default();
+            self.near_rows(p, c, r2, ring1, &mut runs);
+            runs.flush(scan, r2, found);
+        } else {
+            self.walk_rings(p, c, radius, margin, scan, found);
+        }
+    }
+
+    /// The distance from p (in cell `c`) to the nearest y or z face of its row: ring q + 1
+    /// and beyond lie at least q cells plus this far away.
+    #[inline(always)]
+    fn row_margin(&self, p: Vec3, c: IVec3) -> f32 {
+        let o = self.origin;
         let (ly, lz) = (o.y + c.y as f32 * self.cell, o.z + c.z as f32 * self.cell);
-        let margin = (p.y - ly)
+        (p.y - ly)
             .min(ly + self.cell - p.y)
             .min(p.z - lz)
             .min(lz + self.cell - p.z)
-            .max(0.0);
+            .max(0.0)
+    }
+
+    /// [`Grid::walk`] ring by ring, `margin` being [`Grid::row_margin`].
+    fn walk_rings(
+        &self,
+        p: Vec3,
+        c: IVec3,
+        radius: f32,
+        margin: f32,
+        scan: &Scan,
+        found: &mut Found,
+    ) {
+        let (d, o) = (self.dims, self.origin);
+        let r2 = radius * radius;
         // Each ring's rows are first listed, then collected: the chord's arithmetic and the
         // two reads of where its cells begin are then independent from row to row, instead
         // of waiting each time for the last row's scan (whose end the branch predictor
@@ -652,6 +683,47 @@ impl Grid {
                 }
             }
             runs.flush(scan, r2, found);
+        }
+    }
+
+    /// The rows of rings 0 and 1 (ring 1 only if `ring1`) in [`Grid::walk`]'s order, each
+    /// trimmed to the chord of the sphere of squared radius `r2` through it, as
+    /// [`Grid::row`] lists them: every one of the nine is worked out, and the count
+    /// advanced by whether it lies in the grid and within reach. Which rows those are
+    /// depends on where p lies in its cell, which the branch predictor cannot foresee:
+    /// a branch per row missed about as often as it was taken.
+    #[inline(always)]
+    fn near_rows(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
+        let (d, o) = (self.dims, self.origin);
+        let last = (d.x - 1) as f32;
+        // Squared distances to the slabs of c.z − 1, c.z, c.z + 1 (and y alike), as
+        // `walk` and `row` work them out; those of slabs outside the grid are not used.
+        let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
+        let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
+        // (y offset, z offset, in ring 1): ring 0's row, then ring 1's in walk's order.
+        const ROWS: [(i32, i32, bool); 9] = [
+            (0, 0, false),
+            (-1, -1, true),
+            (0, -1, true),
+            (1, -1, true),
+            (-1, 0, true),
+            (1, 0, true),
+            (-1, 1, true),
+            (0, 1, true),
+            (1, 1, true),
+        ];
+        for (dy, dz, outer) in ROWS {
+            let (y, z) = (c.y + dy, c.z + dz);
+            let inside = y >= 0 && y < d.y && z >= 0 && z < d.z;
+            let dyz2 = dz2[(dz + 1) as usize] + dy2[(dy + 1) as usize];
+            let keep = inside & (ring1 | !outer) & (dyz2 < r2);
+            let w = (r2 - dyz2).max(0.0).sqrt();
+            let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
+            let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
+            let (y, z) = (y.clamp(0, d.y - 1), z.clamp(0, d.z - 1));
+            let row = (d.x * (y + d.y * z)) as usize;
+            runs.runs[runs.len] = (self.starts[row + a], self.starts[row + b + 1]);
+            runs.len += keep as usize;
         }
     }
 
@@ -1418,6 +1490,63 @@ mod tests {
         g.build(&pts, 0.15);
         assert!(g.cell() < 0.15 * 0.3, "cell {} m", g.cell());
         check(&pts, 0.15, 16);
+    }
+
+    #[test]
+    fn the_near_rows_collect_what_the_ring_walk_collects_in_its_order() {
+        // Crowds filling their grids (so that their edges, where rows fall outside the grid,
+        // have neighbours), walked out to reaches from a tenth of a cell to past two cells:
+        // wherever `walk` lists rings 0 and 1 without branches, the candidates and their
+        // order are the ring walk's.
+        let (mut near, mut rings) = (0, 0);
+        for (seed, half) in [(7, 0.1), (9, 0.123)] {
+            let pts = cloud(seed, 20_000, half);
+            let mut g = Grid::default();
+            g.build(&pts, 0.15);
+            assert!(g.split > 1, "a crowd's grid");
+            let cell = g.cell();
+            // Every 13th point, and the outermost along each axis, whose ring 1 leaves the
+            // grid.
+            let extreme = |key: fn(&Vec3) -> f32| {
+                let by = |a: &usize, b: &usize| key(&pts[*a]).total_cmp(&key(&pts[*b]));
+                let all = 0..pts.len();
+                [all.clone().min_by(by).unwrap(), all.max_by(by).unwrap()]
+            };
+            let edges = [extreme(|p| p.x), extreme(|p| p.y), extreme(|p| p.z)];
+            let queries = (0..pts.len())
+                .step_by(13)
+                .chain(edges.into_iter().flatten());
+            for (i, n) in queries.flat_map(|i| (0..12).map(move |n| (i, n))) {
+                let p = pts[i];
+                let reach = cell * (0.1 + 0.2 * n as f32);
+                for wide in [false, wide_collect()] {
+                    let scan = Scan {
+                        xs: &g.xs,
+                        ys: &g.ys,
+                        zs: &g.zs,
+                        p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
+                        skip_slot: g.slot[i],
+                        k: MAX_K,
+                        wide,
+                    };
+                    let c = g.cell_of(p);
+                    let margin = g.row_margin(p, c);
+                    let (mut a, mut b) = (Found::default(), Found::default());
+                    g.walk(p, c, reach, &scan, &mut a);
+                    g.walk_rings(p, c, reach, margin, &scan, &mut b);
+                    assert_eq!(a.slots[..a.len], b.slots[..b.len], "{i}, reach {reach}");
+                    if cell + margin >= reach {
+                        near += 1;
+                    } else {
+                        rings += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            near > 20_000 && rings > 20_000,
+            "{near} near, {rings} ring walks"
+        );
     }
 
     #[test]
