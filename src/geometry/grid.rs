@@ -695,7 +695,6 @@ impl Grid {
     #[inline(always)]
     fn near_rows(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
         let (d, o) = (self.dims, self.origin);
-        let last = (d.x - 1) as f32;
         // Squared distances to the slabs of c.z − 1, c.z, c.z + 1 (and y alike), as
         // `walk` and `row` work them out; those of slabs outside the grid are not used.
         let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
@@ -718,11 +717,8 @@ impl Grid {
             let dyz2 = dz2[(dz + 1) as usize] + dy2[(dy + 1) as usize];
             let keep = inside & (ring1 | !outer) & (dyz2 < r2);
             let w = (r2 - dyz2).max(0.0).sqrt();
-            let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
-            let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
             let (y, z) = (y.clamp(0, d.y - 1), z.clamp(0, d.z - 1));
-            let row = (d.x * (y + d.y * z)) as usize;
-            runs.runs[runs.len] = (self.starts[row + a], self.starts[row + b + 1]);
+            runs.runs[runs.len] = self.chord(p, y, z, w);
             runs.len += keep as usize;
         }
     }
@@ -743,20 +739,26 @@ impl Grid {
         found: &mut Found,
         runs: &mut Runs,
     ) {
-        let (d, o) = (self.dims, self.origin);
-        let dyz2 = dz2 + self.slab_d2(p.y, o.y, y);
+        let dyz2 = dz2 + self.slab_d2(p.y, self.origin.y, y);
         if dyz2 < r2 {
-            let w = (r2 - dyz2).sqrt();
-            // Clamped in floats, where truncation is the floor.
-            let last = (d.x - 1) as f32;
-            let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
-            let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
-            let row = (d.x * (y + d.y * z)) as usize;
-            runs.push((self.starts[row + a], self.starts[row + b + 1]));
+            runs.push(self.chord(p, y, z, (r2 - dyz2).sqrt()));
             if runs.len == RUNS {
                 runs.flush(scan, r2, found);
             }
         }
+    }
+
+    /// The run of the sorted arrays (start, end) that row (y, z), a row of the grid, holds
+    /// over the chord from p.x − `w` to p.x + `w`, in whole x cells clamped to the grid
+    /// (clamped in floats, where truncation is the floor).
+    #[inline(always)]
+    fn chord(&self, p: Vec3, y: i32, z: i32, w: f32) -> (u32, u32) {
+        let (d, o) = (self.dims, self.origin);
+        let last = (d.x - 1) as f32;
+        let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
+        let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
+        let row = (d.x * (y + d.y * z)) as usize;
+        (self.starts[row + a], self.starts[row + b + 1])
     }
 
     /// Squared distance from coordinate `v` to cell `i`'s slab along one axis.
