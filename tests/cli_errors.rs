@@ -1484,7 +1484,7 @@ fn a_velocity_database_is_read_and_its_errors_located() {
     let run = run_with("fastswarm", "few.db");
     assert_says(
         &run.stderr,
-        &["few.db: 1 samples; a database needs at least 300"],
+        &["few.db: 1 samples; a database needs at least 50 (ten in each of 5 speed groups)"],
     );
     let run = run_with("bee", "few.db");
     assert_eq!(run.code, 2);

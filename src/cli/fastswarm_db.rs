@@ -24,7 +24,7 @@ pub struct FastswarmDbArgs {
     #[arg(long, default_value_t = 0.02)]
     pub dt: f64,
     /// At most this many samples, taken evenly over the speed ranks.
-    #[arg(long, default_value_t = 1200)]
+    #[arg(long, default_value_t = 300)]
     pub samples: usize,
     /// Samples slower than this (an insect at rest) are left out, m/s.
     #[arg(long, default_value_t = 0.01)]

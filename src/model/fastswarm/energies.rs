@@ -998,9 +998,9 @@ mod tests {
         let db = Database::default_mosquito();
         let f = db.family(super::super::database::Family::Free);
         let frame = e.frame(c, s);
-        let energies = frame.energies(f, 300, LANES, f32::INFINITY);
+        let energies = frame.energies(f, 100, LANES, f32::INFINITY);
         for (l, &got) in energies.iter().enumerate() {
-            let sample = db.samples[super::super::database::Family::Free.index(300 + l)];
+            let sample = db.samples[super::super::database::Family::Free.index(100 + l)];
             let (vw, aw) = (turn(sample.v, c, s), turn(sample.a, c, s));
             let p1 = p + vw * dt;
             let unit = |u: Vec3| normalize_or(u, Vec3::ZERO);
