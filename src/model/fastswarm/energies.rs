@@ -5,7 +5,7 @@
 //! a velocity has no direction).
 
 use super::database::{LANES, Soa, turn};
-use super::neighbours::{Batch, CellIndex};
+use super::neighbours::{Batch, CellIndex, Nearest};
 use crate::math::normalize_or;
 use crate::model::context::MAX_NEIGHBOURS;
 use glam::{Mat3, Vec3};
@@ -89,6 +89,16 @@ const TERMS: usize = 11;
 /// in flight; 16 and 48 measured slower), 8 in the others (16 there measured slower).
 const MAX_GROUP: usize = 32;
 
+/// What [`Attraction::gather`] looks for: Eq. 6's zone r1 ≤ d < r2 (at most `limit` of
+/// it) and Eq. 4's, d < r0; m.
+#[derive(Clone, Copy, Debug)]
+pub struct Zone {
+    pub r0: f32,
+    pub r1: f32,
+    pub r2: f32,
+    pub limit: usize,
+}
+
 /// The most neighbours [`Attraction::gather`] takes: a whole 500-agent shape fits, and a
 /// bound keeps the step's cost bounded.
 pub const MAX_GATHER: usize = 512;
@@ -143,22 +153,23 @@ impl Attraction {
 
     /// Adds the neighbours in the attraction zone, r1 ≤ d < r2, of `cells` (the agent
     /// `exclude`, itself, left out), at most `limit` (and [`MAX_GATHER`]) in all: the first
-    /// found, in [`CellIndex::for_each_in_shell`]'s order. The sums must be empty.
+    /// found, in [`CellIndex::for_each_in_shell`]'s order. The sums must be empty. The same
+    /// scan finds Eq. 4's neighbours, those strictly within r0, for `nearest`.
     #[inline]
-    pub fn gather(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
+    pub fn gather(&mut self, cells: &CellIndex, exclude: usize, zone: Zone, nearest: &mut Nearest) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512vl")
         {
             // SAFETY: the CPU has AVX-512 F and VL, checked just above.
-            return unsafe { self.gather_avx512(cells, exclude, r1, r2, limit) };
+            return unsafe { self.gather_avx512(cells, exclude, zone, nearest) };
         }
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.gather_avx2(cells, exclude, r1, r2, limit) };
+            return unsafe { self.gather_avx2(cells, exclude, zone, nearest) };
         }
-        self.gather_batches::<false, false, 8>(cells, exclude, r1, r2, limit);
+        self.gather_batches::<false, false, 8>(cells, exclude, zone, nearest);
     }
 
     /// [`Self::gather_batches`] compiled for AVX2: Eq. 6's terms for eight neighbours in
@@ -166,16 +177,16 @@ impl Attraction {
     /// multiply-add, as in selection.rs).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, false, 8>(cells, exclude, r1, r2, limit);
+    fn gather_avx2(&mut self, cells: &CellIndex, exclude: usize, zone: Zone, near: &mut Nearest) {
+        self.gather_batches::<true, false, 8>(cells, exclude, zone, near);
     }
 
     /// [`Self::gather_batches`] compiled for AVX-512, summing 32 neighbours at once (two
     /// registers per quantity): the same additions in the same order, so the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, r1: f32, r2: f32, limit: usize) {
-        self.gather_batches::<true, true, 32>(cells, exclude, r1, r2, limit);
+    fn gather_avx512(&mut self, cells: &CellIndex, exclude: usize, zone: Zone, near: &mut Nearest) {
+        self.gather_batches::<true, true, 32>(cells, exclude, zone, near);
     }
 
     /// In two passes: the scan collects the neighbours' positions in a buffer, then their
@@ -187,12 +198,13 @@ impl Attraction {
         &mut self,
         cells: &CellIndex,
         exclude: usize,
-        r1: f32,
-        r2: f32,
-        limit: usize,
+        zone: Zone,
+        nearest: &mut Nearest,
     ) {
         debug_assert_eq!(self.n, 0, "gathers into empty sums");
+        let Zone { r0, r1, r2, limit } = zone;
         let limit = limit.min(MAX_GATHER);
+        let p = self.p;
         // Left uninitialised: zeroing 6 kB per agent was 2 % of the step. Every slot read
         // below is written first (see `filled`).
         let mut buf = [[MaybeUninit::<f32>::uninit(); MAX_GATHER + MAX_GROUP]; 3];
@@ -200,7 +212,8 @@ impl Attraction {
         // The agent itself, at distance 0, is in the shell only when r1² is 0 (the test
         // of every lane's index against it was 3 % of the step).
         let may_hold_self = r1 * r1 <= 0.0;
-        cells.for_each_batch_in_shell(self.p, r1, r2, |b, mut hits| {
+        cells.for_each_batch_in_shell(p, r1, r2, r0, |b, mut hits, close| {
+            nearest.note(cells, &b, close, p, exclude);
             if may_hold_self {
                 for (l, &j) in b.index.iter().enumerate() {
                     hits &= !(u32::from(j as usize == exclude) << l);
@@ -229,6 +242,7 @@ impl Attraction {
                 n += ((hits >> l) & 1) as usize;
             }
         });
+        nearest.finish(cells, p, exclude);
         // The last group reads up to N slots past the n found (lanes it then leaves out).
         for a in &mut buf {
             for slot in &mut a[n..n + N] {
@@ -882,8 +896,18 @@ mod tests {
                         one.add(q);
                     }
                 });
+                let zone = Zone {
+                    r0: 0.12,
+                    r1,
+                    r2: d2,
+                    limit,
+                };
+                let mut near = Nearest::default();
                 let mut batched = Attraction::new(rho, d1, p);
-                batched.gather(&cells, i, r1, d2, limit);
+                batched.gather(&cells, i, zone, &mut near);
+                let mut alone = Nearest::default();
+                cells.nearest_within(p, 0.12, i, &mut alone);
+                assert_eq!(near.found(), alone.found(), "agent {i}");
                 cut += usize::from(limit == 13 && one.n == 13);
                 assert_eq!(
                     bits(&one),
@@ -892,7 +916,9 @@ mod tests {
                 );
                 // Every build, whichever `gather` picked on this CPU.
                 let mut portable = Attraction::new(rho, d1, p);
-                portable.gather_batches::<false, false, 8>(&cells, i, r1, d2, limit);
+                let mut near = Nearest::default();
+                portable.gather_batches::<false, false, 8>(&cells, i, zone, &mut near);
+                assert_eq!(near.found(), alone.found(), "agent {i}");
                 assert_eq!(
                     bits(&one),
                     bits(&portable),
@@ -901,8 +927,10 @@ mod tests {
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
                     let mut avx2 = Attraction::new(rho, d1, p);
+                    let mut near = Nearest::default();
                     // SAFETY: AVX2 checked just above.
-                    unsafe { avx2.gather_avx2(&cells, i, r1, d2, limit) };
+                    unsafe { avx2.gather_avx2(&cells, i, zone, &mut near) };
+                    assert_eq!(near.found(), alone.found(), "agent {i}");
                     assert_eq!(bits(&one), bits(&avx2), "agent {i}, r1 {r1}, limit {limit}");
                 }
             }

@@ -23,8 +23,9 @@ use crate::field::CurlNoise;
 use crate::math::{self, Rng};
 use crate::species::{Channel, HONEYBEE};
 use database::Database;
-use energies::{Attraction, Energy, MAX_GATHER, MAX_STIMULI};
+use energies::{Attraction, Energy, MAX_GATHER, MAX_STIMULI, Zone};
 use glam::Vec3;
+use neighbours::Nearest;
 use params::FastswarmParams;
 use shape::Tour;
 
@@ -81,10 +82,13 @@ pub struct FastswarmModel {
     targets: Vec<usize>,
     radius: f32,
     yaw_blend: f32,
-    /// Every agent by grid cell, for Eq. 6's attraction zone (rebuilt each step).
+    /// Every agent by grid cell, for Eq. 6's attraction zone and Eq. 4's repulsion zone
+    /// (rebuilt each step).
     cells: neighbours::CellIndex,
-    /// Every agent's position at the step (what `cells` is built from; kept to reuse).
+    /// Every agent's position at the step by id (what `cells` is built from; kept to reuse).
     positions: Vec<Vec3>,
+    /// Every agent's velocity by id, m/s (Eq. 4's p′_j = p_j + v_jΔt).
+    velocities: Vec<Vec3>,
 }
 
 impl FastswarmModel {
@@ -130,27 +134,38 @@ impl Model for FastswarmModel {
             yaw_blend: lag_blend(s.dt as f32, HEADING_LAG),
             cells: neighbours::CellIndex::default(),
             positions: Vec::new(),
+            velocities: Vec::new(),
             p,
         }
     }
 
-    /// The world's neighbour list serves the repulsion zone only (Eq. 4); the attraction
-    /// zone is searched in the model's own grid (see `prepare`).
+    /// How far it looks for repulsion (Eq. 4); both its zones are searched in its own
+    /// grid (see `prepare`).
     fn reach(&self) -> f32 {
         self.p.d_rep as f32
     }
 
-    /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them), by
-    /// id: the order of Eq. 6's sum, and who counts in a crowd past its limit, must not
-    /// depend on where the world stores the agents.
+    /// Both neighbour zones come from the model's own grid (`prepare`), not the world's
+    /// lists: Eq. 6's must hold every agent in the zone, and Eq. 4's are found by the same
+    /// scan, so the world builds no grid for a swarm of fastswarm alone.
+    fn lists_neighbours(&self) -> bool {
+        false
+    }
+
+    /// Indexes every agent for the attraction zone (Eq. 6 averages over all of them) and
+    /// the repulsion zone, by id: the order of Eq. 6's sum, who counts in a crowd past its
+    /// limit, and which k are the nearest at equal distances must not depend on where the
+    /// world stores the agents.
     fn prepare(&mut self, cx: &Context) {
-        let cell = (self.p.d_att2 as f32).max(1e-4);
+        // Cells as wide as the wider zone: the 27 around an agent hold both.
+        let cell = (self.p.d_att2.max(self.p.d_rep) as f32).max(1e-4);
+        let by_id = cx.indices_by_id();
         self.positions.clear();
-        self.positions.extend(
-            cx.indices_by_id()
-                .iter()
-                .map(|&k| cx.agents[k as usize].pos),
-        );
+        self.positions
+            .extend(by_id.iter().map(|&k| cx.agents[k as usize].pos));
+        self.velocities.clear();
+        self.velocities
+            .extend(by_id.iter().map(|&k| cx.agents[k as usize].vel));
         self.cells.build(&self.positions, cell);
     }
 
@@ -209,22 +224,30 @@ impl Model for FastswarmModel {
 
         // Eq. 4 and 6: neighbours in the repulsion and attraction zones.
         let (d_rep, d_att1, d_att2) = (p.d_rep as f32, p.d_att1 as f32, p.d_att2 as f32);
-        let mut rep = [Vec3::ZERO; MAX_NEIGHBOURS];
-        let mut nr = 0;
-        cx.for_each_neighbour(i, d_rep, |j, pj, _| {
-            rep[nr] = pj + cx.agents[j].vel * dt;
-            nr += 1;
-        });
-        e.repulsion(p.w_rep as f32, d_rep, &rep[..nr]);
-        // Table 1, escaping "in danger": no attraction to neighbours or the centre.
         let calm = if startled { 0.0 } else { 1.0 };
         let w_oa = p.w_oa as f32 * calm;
-        // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
-        // more, the first MAX_GATHER found (the sum is an average).
         let mut att = Attraction::new(self.rho, d_att1, pos);
+        let mut near = Nearest::default();
         if w_oa > 0.0 {
-            att.gather(&self.cells, cx.id(i), d_att1, d_att2, MAX_GATHER);
+            let zone = Zone {
+                r0: d_rep,
+                r1: d_att1,
+                r2: d_att2,
+                limit: MAX_GATHER,
+            };
+            att.gather(&self.cells, cx.id(i), zone, &mut near);
+        } else {
+            self.cells.nearest_within(pos, d_rep, cx.id(i), &mut near);
         }
+        let mut rep = [Vec3::ZERO; MAX_NEIGHBOURS];
+        for (r, (&j, &pj)) in rep
+            .iter_mut()
+            .zip(near.index.iter().zip(&near.pos))
+            .take(near.n)
+        {
+            *r = pj + self.velocities[j as usize] * dt;
+        }
+        e.repulsion(p.w_rep as f32, d_rep, &rep[..near.n]);
         e.attraction_sums(w_oa, &att);
         if let Some(c) = self.center {
             e.direction(p.w_cos as f32 * calm, c - pos);

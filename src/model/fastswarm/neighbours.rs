@@ -6,10 +6,132 @@
 //!
 //! Conventions: metres, world Y-up.
 
+use crate::model::context::MAX_NEIGHBOURS;
 use glam::Vec3;
 
 /// Entries tested at once in a scan.
 pub const LANES: usize = 8;
+
+/// Eq. 4's repulsion neighbours, found by the same scan as Eq. 6's: the
+/// [`MAX_NEIGHBOURS`] nearest strictly within the repulsion radius, so at most k as for
+/// every model that sums over neighbours (docs/model.md, "Bounded neighbours"). In the
+/// scan's order (cell by cell, each in index order); when more than k are that close,
+/// the k nearest (equal distances by agent index), nearest first.
+#[derive(Clone, Copy, Debug)]
+pub struct Nearest {
+    /// How many were found: at most [`NEAR_ROOM`] during the scan, at most
+    /// [`MAX_NEIGHBOURS`] after [`Nearest::finish`].
+    pub n: usize,
+    d2: [f32; NEAR_ROOM],
+    /// Agent index and position of each, m.
+    pub index: [u32; NEAR_ROOM],
+    pub pos: [Vec3; NEAR_ROOM],
+    /// Batches noted during the scan with some lane within the radius: where each starts
+    /// and which lanes.
+    pending: [(u32, u32); PENDING],
+    n_pending: usize,
+}
+
+/// Room for the close agents a scan finds; past it, only the nearest are kept.
+const NEAR_ROOM: usize = 2 * MAX_NEIGHBOURS;
+
+/// Batches noted before they are taken.
+const PENDING: usize = 16;
+
+impl Default for Nearest {
+    fn default() -> Self {
+        Nearest {
+            n: 0,
+            d2: [0.0; NEAR_ROOM],
+            index: [0; NEAR_ROOM],
+            pos: [Vec3::ZERO; NEAR_ROOM],
+            pending: [(0, 0); PENDING],
+            n_pending: 0,
+        }
+    }
+}
+
+impl Nearest {
+    /// Notes batch `b` of `cells` if some lane is set in `close`, to be taken after the
+    /// scan (or when the notes are full): written every time and counted by whether it
+    /// holds any, so that the scan's loop has no branch on it.
+    #[inline(always)]
+    pub fn note(&mut self, cells: &CellIndex, b: &Batch<'_>, close: u32, p: Vec3, exclude: usize) {
+        self.pending[self.n_pending] = (b.at as u32, close);
+        self.n_pending += usize::from(close != 0);
+        if self.n_pending == PENDING {
+            self.take_noted(cells, p, exclude);
+        }
+    }
+
+    /// Takes the batches noted.
+    fn take_noted(&mut self, cells: &CellIndex, p: Vec3, exclude: usize) {
+        for k in 0..self.n_pending {
+            let (at, close) = self.pending[k];
+            self.take(&cells.batch(at as usize), close, p, exclude);
+        }
+        self.n_pending = 0;
+    }
+
+    /// Takes the agents of `b`'s lanes set in `hits` (within the radius) but `exclude`,
+    /// each at squared distance (q − p)·(q − p). Few agents are this close (about six at
+    /// the bench's aggregation), so a branch per hit costs little.
+    #[inline(always)]
+    fn take(&mut self, b: &Batch<'_>, mut hits: u32, p: Vec3, exclude: usize) {
+        while hits != 0 {
+            let l = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            let j = b.index[l];
+            if j as usize != exclude {
+                let q = Vec3::new(b.x[l], b.y[l], b.z[l]);
+                let d2 = q.distance_squared(p);
+                if self.n < NEAR_ROOM {
+                    (self.d2[self.n], self.index[self.n], self.pos[self.n]) = (d2, j, q);
+                    self.n += 1;
+                } else {
+                    self.displace(d2, j, q);
+                }
+            }
+        }
+    }
+
+    /// A crowd: the room is full, so the farthest kept gives way to a nearer one.
+    #[cold]
+    fn displace(&mut self, d2: f32, j: u32, q: Vec3) {
+        let key = |k: usize| (self.d2[k], self.index[k]);
+        let far = (1..NEAR_ROOM).fold(0, |m, k| if key(k) > key(m) { k } else { m });
+        if (d2, j) < key(far) {
+            (self.d2[far], self.index[far], self.pos[far]) = (d2, j, q);
+        }
+    }
+
+    /// The agents found, by index (tests).
+    #[cfg(test)]
+    pub fn found(&self) -> Vec<u32> {
+        self.index[..self.n].to_vec()
+    }
+
+    /// After the scan: takes the batches noted; more than k found keeps the k nearest,
+    /// nearest first.
+    pub fn finish(&mut self, cells: &CellIndex, p: Vec3, exclude: usize) {
+        self.take_noted(cells, p, exclude);
+        if self.n <= MAX_NEIGHBOURS {
+            return;
+        }
+        let mut order: [usize; NEAR_ROOM] = std::array::from_fn(|k| k);
+        let order = &mut order[..self.n];
+        order.sort_unstable_by(|&a, &b| {
+            (self.d2[a], self.index[a])
+                .partial_cmp(&(self.d2[b], self.index[b]))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+        let kept = *self;
+        for (k, &o) in order.iter().take(MAX_NEIGHBOURS).enumerate() {
+            (self.d2[k], self.index[k], self.pos[k]) = (kept.d2[o], kept.index[o], kept.pos[o]);
+        }
+        self.n = MAX_NEIGHBOURS;
+    }
+}
 
 /// The most cells a dense table may hold per indexed agent (beyond a floor of
 /// [`MIN_TABLE`]); a swarm spread wider is searched by binary search in the sorted keys.
@@ -45,6 +167,8 @@ pub struct CellIndex {
 /// agent indices (entries past the end: +∞ and `u32::MAX`).
 #[derive(Clone, Copy, Debug)]
 pub struct Batch<'a> {
+    /// Where the batch starts in the index.
+    pub at: usize,
     pub x: &'a [f32; LANES],
     pub y: &'a [f32; LANES],
     pub z: &'a [f32; LANES],
@@ -195,7 +319,7 @@ impl CellIndex {
     /// threads. A row of three cells along z is one run, tested [`LANES`] at a time.
     #[inline]
     pub fn for_each_in_shell(&self, p: Vec3, r1: f32, r2: f32, mut f: impl FnMut(usize, Vec3)) {
-        self.for_each_batch_in_shell(p, r1, r2, |b, mut hits| {
+        self.for_each_batch_in_shell(p, r1, r2, 0.0, |b, mut hits, _| {
             while hits != 0 {
                 let l = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
@@ -204,45 +328,89 @@ impl CellIndex {
         });
     }
 
-    /// [`Self::for_each_in_shell`] a batch at a time: `f(batch, hits)` for every [`LANES`]
-    /// entries scanned, bit l of `hits` set where lane l is in the shell (lanes past the
-    /// run are never set), in the same order. The caller takes the hits without a branch
-    /// per hit: a hit or a miss is a coin toss the branch predictor loses (about one in
-    /// seven scanned agents is in the shell at the bench's density).
+    /// [`Self::for_each_in_shell`] a batch at a time: `f(batch, hits, close)` for every
+    /// [`LANES`] entries scanned, bit l of `hits` set where lane l is in the shell, and of
+    /// `close` where it is strictly within `r0` (the agent at `p` itself included; lanes
+    /// past the run are never set), in the same order. The caller takes the hits without
+    /// a branch per hit: a hit or a miss is a coin toss the branch predictor loses (about
+    /// one in seven scanned agents is in the shell at the bench's density).
     #[inline(always)]
     pub fn for_each_batch_in_shell(
         &self,
         p: Vec3,
         r1: f32,
         r2: f32,
-        mut f: impl FnMut(Batch<'_>, u32),
+        r0: f32,
+        f: impl FnMut(Batch<'_>, u32, u32),
     ) {
-        let (near2, far2) = (r1 * r1, r2 * r2);
         let c = [p.x, p.y, p.z].map(|x| coord(x, self.cell));
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                let run = self.row(c[0] + dx, c[1] + dy, c[2] - 1, c[2] + 1);
+        let radii = [r1, r2, r0].map(|r| r * r);
+        self.for_each_batch_in_cells(p, radii, c.map(|c| c - 1), c.map(|c| c + 1), f);
+    }
+
+    /// The Eq. 4 neighbours of the agent `exclude` at `p`: the [`Nearest`] strictly within
+    /// `r0` (at most one cell edge). Only the cells the sphere of radius r0 reaches are
+    /// scanned (one to eight, against Eq. 6's 27).
+    pub fn nearest_within(&self, p: Vec3, r0: f32, exclude: usize, nearest: &mut Nearest) {
+        let c = [p.x, p.y, p.z].map(|x| coord(x, self.cell));
+        let (lo, hi) = (p - Vec3::splat(r0), p + Vec3::splat(r0));
+        // Within one cell of p's, however the rounding of p ± r0 falls.
+        let lo = [lo.x, lo.y, lo.z].map(|x| coord(x, self.cell));
+        let hi = [hi.x, hi.y, hi.z].map(|x| coord(x, self.cell));
+        let lo = std::array::from_fn(|a| lo[a].clamp(c[a] - 1, c[a]));
+        let hi = std::array::from_fn(|a| hi[a].clamp(c[a], c[a] + 1));
+        // An empty shell: only the lanes within r0 (the agent itself too, left out by
+        // `take`).
+        self.for_each_batch_in_cells(p, [0.0, 0.0, r0 * r0], lo, hi, |b, _, close| {
+            nearest.note(self, &b, close, p, exclude);
+        });
+        nearest.finish(self, p, exclude);
+    }
+
+    /// [`Self::for_each_batch_in_shell`] over the cells `lo ..= hi` (per axis), rows along
+    /// z in x then y order; `radii` are r1², r2² and r0².
+    #[inline(always)]
+    fn for_each_batch_in_cells(
+        &self,
+        p: Vec3,
+        radii: [f32; 3],
+        lo: [i64; 3],
+        hi: [i64; 3],
+        mut f: impl FnMut(Batch<'_>, u32, u32),
+    ) {
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                let run = self.row(x, y, lo[2], hi[2]);
                 for b in run.clone().step_by(LANES) {
-                    let mut hits = self.shell_lanes(b, p, near2, far2);
+                    let (mut hits, mut close) = self.shell_lanes(b, p, radii);
                     if run.end - b < LANES {
-                        hits &= (1 << (run.end - b)) - 1;
+                        let within = (1 << (run.end - b)) - 1;
+                        (hits, close) = (hits & within, close & within);
                     }
-                    let batch = Batch {
-                        x: self.x[b..b + LANES].try_into().expect("padded"),
-                        y: self.y[b..b + LANES].try_into().expect("padded"),
-                        z: self.z[b..b + LANES].try_into().expect("padded"),
-                        index: self.index[b..b + LANES].try_into().expect("padded"),
-                    };
-                    f(batch, hits);
+                    f(self.batch(b), hits, close);
                 }
             }
         }
     }
 
-    /// Bit l set where entry `b + l` is in the shell: the same f32 operations as
-    /// `q.distance_squared(p)`, (q − p) · (q − p) summed x, y, z.
+    /// The [`LANES`] entries from `b`.
     #[inline(always)]
-    fn shell_lanes(&self, b: usize, p: Vec3, near2: f32, far2: f32) -> u32 {
+    fn batch(&self, b: usize) -> Batch<'_> {
+        Batch {
+            at: b,
+            x: self.x[b..b + LANES].try_into().expect("padded"),
+            y: self.y[b..b + LANES].try_into().expect("padded"),
+            z: self.z[b..b + LANES].try_into().expect("padded"),
+            index: self.index[b..b + LANES].try_into().expect("padded"),
+        }
+    }
+
+    /// Bits l set where entry `b + l` is in the shell r1² ≤ d² < r2², and where d² < r0²
+    /// (`radii`), d² the same f32 operations as `q.distance_squared(p)`, (q − p) · (q − p)
+    /// summed x, y, z.
+    #[inline(always)]
+    fn shell_lanes(&self, b: usize, p: Vec3, radii: [f32; 3]) -> (u32, u32) {
+        let [near2, far2, close2] = radii;
         let (x, y, z) = (
             &self.x[b..b + LANES],
             &self.y[b..b + LANES],
@@ -255,7 +423,8 @@ impl CellIndex {
             unsafe {
                 let (px, py, pz) = (_mm_set1_ps(p.x), _mm_set1_ps(p.y), _mm_set1_ps(p.z));
                 let (near, far) = (_mm_set1_ps(near2), _mm_set1_ps(far2));
-                let mut hits = 0;
+                let close = _mm_set1_ps(close2);
+                let (mut hits, mut closer) = (0, 0);
                 for h in [0, 4] {
                     let dx = _mm_sub_ps(_mm_loadu_ps(x[h..].as_ptr()), px);
                     let dy = _mm_sub_ps(_mm_loadu_ps(y[h..].as_ptr()), py);
@@ -266,19 +435,21 @@ impl CellIndex {
                     );
                     let m = _mm_and_ps(_mm_cmpge_ps(d2, near), _mm_cmplt_ps(d2, far));
                     hits |= (_mm_movemask_ps(m) as u32) << h;
+                    closer |= (_mm_movemask_ps(_mm_cmplt_ps(d2, close)) as u32) << h;
                 }
-                hits
+                (hits, closer)
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
-            let mut hits = 0;
+            let (mut hits, mut closer) = (0, 0);
             for l in 0..LANES {
                 let (dx, dy, dz) = (x[l] - p.x, y[l] - p.y, z[l] - p.z);
                 let d2 = dx * dx + dy * dy + dz * dz;
                 hits |= u32::from(d2 >= near2 && d2 < far2) << l;
+                closer |= u32::from(d2 < close2) << l;
             }
-            hits
+            (hits, closer)
         }
     }
 }
@@ -346,5 +517,57 @@ mod tests {
             assert!(!order.is_empty());
             assert_eq!(order, visit(&sparse));
         }
+    }
+
+    #[test]
+    fn nearest_within_keeps_the_k_nearest_as_brute_force_does() {
+        // A cloud dense enough that some agents have more than k within the larger radius.
+        let mut rng = crate::math::Rng::new(13, 0, 0);
+        let pts: Vec<Vec3> = (0..400)
+            .map(|_| {
+                Vec3::new(
+                    rng.range(-0.4, 0.4),
+                    rng.range(-0.3, 0.3),
+                    rng.range(-0.4, 0.4),
+                )
+            })
+            .collect();
+        let mut idx = CellIndex::default();
+        idx.build(&pts, 0.3);
+        let (mut capped, mut some) = (0, 0);
+        for (i, &p) in pts.iter().enumerate() {
+            for r0 in [0.05, 0.12, 0.2, 0.3] {
+                let mut want: Vec<(f32, u32)> = (0..pts.len())
+                    .filter(|&j| j != i && pts[j].distance_squared(p) < r0 * r0)
+                    .map(|j| (pts[j].distance_squared(p), j as u32))
+                    .collect();
+                want.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                let crowd = want.len() > MAX_NEIGHBOURS;
+                want.truncate(MAX_NEIGHBOURS);
+                let mut near = Nearest::default();
+                idx.nearest_within(p, r0, i, &mut near);
+                let got: Vec<(f32, u32)> = (0..near.n)
+                    .map(|k| {
+                        assert_eq!(near.pos[k], pts[near.index[k] as usize]);
+                        (near.pos[k].distance_squared(p), near.index[k])
+                    })
+                    .collect();
+                if crowd {
+                    // More than k that close: the k nearest, nearest first.
+                    assert_eq!(got, want, "agent {i}, r0 {r0}");
+                    capped += 1;
+                } else {
+                    // Fewer: all of them, in the scan's order.
+                    let mut sorted = got.clone();
+                    sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                    assert_eq!(sorted, want, "agent {i}, r0 {r0}");
+                    some += usize::from(!got.is_empty());
+                }
+            }
+        }
+        assert!(
+            capped > 100 && some > 500,
+            "{capped} capped, {some} with some"
+        );
     }
 }
