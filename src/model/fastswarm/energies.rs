@@ -869,16 +869,7 @@ mod tests {
         // finds it: the same neighbours, the same count and the same sums bit for bit,
         // also when the limit cuts a batch.
         let (rho, d1, d2) = (2.5f32, 0.08f32, 0.3f32);
-        let mut rng = crate::math::Rng::new(13, 0, 0);
-        let pts: Vec<Vec3> = (0..400)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-0.4, 0.4),
-                    rng.range(-0.3, 0.3),
-                    rng.range(-0.4, 0.4),
-                )
-            })
-            .collect();
+        let pts = super::super::neighbours::cloud(13, 400, Vec3::new(0.4, 0.3, 0.4));
         let mut cells = CellIndex::default();
         cells.build(&pts, d2);
         let bits = |a: &Attraction| {

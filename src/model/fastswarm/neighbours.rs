@@ -454,22 +454,28 @@ impl CellIndex {
     }
 }
 
+/// `n` points drawn evenly in the box of half-extents `half` about the origin (tests).
+#[cfg(test)]
+pub(crate) fn cloud(seed: u64, n: usize, half: Vec3) -> Vec<Vec3> {
+    let mut rng = crate::math::Rng::new(seed, 0, 0);
+    (0..n)
+        .map(|_| {
+            Vec3::new(
+                rng.range(-half.x, half.x),
+                rng.range(-half.y, half.y),
+                rng.range(-half.z, half.z),
+            )
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn finds_exactly_what_brute_force_finds_within_a_cell_edge() {
-        let mut rng = crate::math::Rng::new(7, 0, 0);
-        let pts: Vec<Vec3> = (0..500)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                )
-            })
-            .collect();
+        let pts = cloud(7, 500, Vec3::splat(1.0));
         let mut idx = CellIndex::default();
         idx.build(&pts, 0.3);
         for &p in &pts[..50] {
@@ -491,16 +497,7 @@ mod tests {
         // One agent 1 km away makes the box of occupied cells too large for a table, so
         // the second index falls back to sorted keys; every query visits the same
         // agents in the same order (what keeps Eq. 6's float sums identical).
-        let mut rng = crate::math::Rng::new(11, 0, 0);
-        let mut pts: Vec<Vec3> = (0..400)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-0.5, 0.5),
-                    rng.range(-1.0, 1.0),
-                )
-            })
-            .collect();
+        let mut pts = cloud(11, 400, Vec3::new(1.0, 0.5, 1.0));
         let (mut dense, mut sparse) = (CellIndex::default(), CellIndex::default());
         dense.build(&pts, 0.3);
         pts.push(Vec3::splat(1000.0));
@@ -522,16 +519,7 @@ mod tests {
     #[test]
     fn nearest_within_keeps_the_k_nearest_as_brute_force_does() {
         // A cloud dense enough that some agents have more than k within the larger radius.
-        let mut rng = crate::math::Rng::new(13, 0, 0);
-        let pts: Vec<Vec3> = (0..400)
-            .map(|_| {
-                Vec3::new(
-                    rng.range(-0.4, 0.4),
-                    rng.range(-0.3, 0.3),
-                    rng.range(-0.4, 0.4),
-                )
-            })
-            .collect();
+        let pts = cloud(13, 400, Vec3::new(0.4, 0.3, 0.4));
         let mut idx = CellIndex::default();
         idx.build(&pts, 0.3);
         let (mut capped, mut some) = (0, 0);
