@@ -23,7 +23,8 @@ pub struct FastswarmDbArgs {
     /// The simulation step to resample to, s (a shot's 1 / (fps × substeps)).
     #[arg(long, default_value_t = 0.02)]
     pub dt: f64,
-    /// At most this many samples, taken evenly over the speed ranks.
+    /// At most this many samples, taken evenly over the speed ranks (300: the paper's k; an
+    /// agent weighs at most 3/5 of them, so the cost per agent grows with this).
     #[arg(long, default_value_t = 300)]
     pub samples: usize,
     /// Samples slower than this (an insect at rest) are left out, m/s.
