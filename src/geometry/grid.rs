@@ -612,9 +612,8 @@ impl Grid {
         // Where ring 2 lies beyond reach (a crowd's guess is about two thirds of a cell),
         // rings 0 and 1 are listed without a branch per row (`near_rows`), the rows the
         // ring walk below would list, in its order.
-        let gap2 = self.cell + margin;
-        if gap2 >= radius || gap2 * gap2 >= r2 {
-            let ring1 = !(margin >= radius || margin * margin >= r2);
+        if beyond(self.cell + margin, radius, r2) {
+            let ring1 = !beyond(margin, radius, r2);
             let mut runs = Runs::default();
             self.near_rows(p, c, r2, ring1, &mut runs);
             runs.flush(scan, r2, found);
@@ -654,11 +653,8 @@ impl Grid {
         // cannot foresee).
         let mut runs = Runs::default();
         for q in 0.. {
-            if q > 0 {
-                let gap = (q - 1) as f32 * self.cell + margin;
-                if gap >= radius || gap * gap >= r2 {
-                    break;
-                }
+            if q > 0 && beyond((q - 1) as f32 * self.cell + margin, radius, r2) {
+                break;
             }
             // The rows at Chebyshev distance exactly q (clipped to the grid) in a fixed
             // order; rows whose slab lies beyond the radius are skipped.
@@ -772,6 +768,14 @@ impl Grid {
         let d = max(max(lo - v, v - (lo + self.cell)), 0.0);
         d * d
     }
+}
+
+/// Whether everything at least `gap` from p lies beyond a walk's reach (`radius`, squared
+/// `r2`): the test that ends the ring walk, and that picks rings 0 and 1 for `near_rows`,
+/// which must agree with it comparison for comparison.
+#[inline(always)]
+fn beyond(gap: f32, radius: f32, r2: f32) -> bool {
+    gap >= radius || gap * gap >= r2
 }
 
 /// The cube root of `x` (positive, or infinite) to about 0.2 %: the exponent divided by
