@@ -87,7 +87,8 @@ pub struct FastswarmModel {
     cells: neighbours::CellIndex,
     /// Every agent's position at the step by id (what `cells` is built from; kept to reuse).
     positions: Vec<Vec3>,
-    /// Every agent's velocity by id, m/s (Eq. 4's p′_j = p_j + v_jΔt).
+    /// Every agent's velocity by id, m/s (Eq. 4's p′_j = p_j + v_jΔt). A copy: reading the
+    /// world's records through `indices_by_id` instead ran 2.6 % slower on one thread.
     velocities: Vec<Vec3>,
 }
 
@@ -224,8 +225,12 @@ impl Model for FastswarmModel {
 
         // Eq. 4 and 6: neighbours in the repulsion and attraction zones.
         let (d_rep, d_att1, d_att2) = (p.d_rep as f32, p.d_att1 as f32, p.d_att2 as f32);
+        // Table 1, escaping "in danger": no attraction to neighbours or the centre.
         let calm = if startled { 0.0 } else { 1.0 };
         let w_oa = p.w_oa as f32 * calm;
+        // Eq. 6: every agent between d_att1 and d_att2 (Sec. 5.2.1's grid); in a crowd of
+        // more, the first MAX_GATHER found (the sum is an average). Eq. 4's neighbours come
+        // from the same scan.
         let mut att = Attraction::new(self.rho, d_att1, pos);
         let mut near = Nearest::default();
         if w_oa > 0.0 {
