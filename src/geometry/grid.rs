@@ -458,14 +458,13 @@ impl Grid {
         if self.len() == 0 {
             return Some(0);
         }
-        let (d, o) = (self.dims, self.origin);
+        let o = self.origin;
         let r2 = radius * radius;
         let (lo, hi) = (
             self.cell_of(p - Vec3::splat(radius)),
             self.cell_of(p + Vec3::splat(radius)),
         );
         let (px, py, pz) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z));
-        let last = (d.x - 1) as f32;
         let mut len = 0;
         for z in lo.z..=hi.z {
             let dz2 = self.slab_d2(p.z, o.z, z);
@@ -477,15 +476,8 @@ impl Grid {
                 if dyz2 >= r2 {
                     continue;
                 }
-                let w = (r2 - dyz2).sqrt();
-                // max/min rather than `clamp`, whose checks cost more than the rest here.
-                let a = ((p.x - w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
-                let b = ((p.x + w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
-                let row = (d.x * (y + d.y * z)) as usize;
-                let (s, e) = (
-                    self.starts[row + a] as usize,
-                    self.starts[row + b + 1] as usize,
-                );
+                let (s, e) = self.chord(p, y, z, (r2 - dyz2).sqrt());
+                let (s, e) = (s as usize, e as usize);
                 // Four at a time, as `Scan::run` (the arrays are padded past the end).
                 let end = e + LANES - 1;
                 let (xs, ys, zs) = (&self.xs[s..end], &self.ys[s..end], &self.zs[s..end]);
@@ -746,13 +738,14 @@ impl Grid {
 
     /// The run of the sorted arrays (start, end) that row (y, z), a row of the grid, holds
     /// over the chord from p.x − `w` to p.x + `w`, in whole x cells clamped to the grid
-    /// (clamped in floats, where truncation is the floor).
+    /// (clamped in floats, where truncation is the floor). `max` and `min` rather than
+    /// `clamp`, whose check that its bounds are ordered costs more than the rest here.
     #[inline(always)]
     fn chord(&self, p: Vec3, y: i32, z: i32, w: f32) -> (u32, u32) {
         let (d, o) = (self.dims, self.origin);
         let last = (d.x - 1) as f32;
-        let a = ((p.x - w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
-        let b = ((p.x + w - o.x) * self.inv_cell.x).clamp(0.0, last) as usize;
+        let a = ((p.x - w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
+        let b = ((p.x + w - o.x) * self.inv_cell.x).max(0.0).min(last) as usize;
         let row = (d.x * (y + d.y * z)) as usize;
         (self.starts[row + a], self.starts[row + b + 1])
     }
