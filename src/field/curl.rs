@@ -8,6 +8,7 @@
 //! (one scene force unit per unit mass = 1 m/s², see docs/model.md).
 
 use super::noise::{LatticePoint, Perlin, gradients3};
+use super::wide::WideTables;
 use glam::Vec3;
 
 /// Metres per scene length unit of paper 000, whose Table I (h, L) and Eq. 8's gain are
@@ -21,21 +22,40 @@ pub struct CurlNoise {
     inv_cell: f32,
     /// ε / L² with L in scene units.
     gain: f32,
+    /// The potentials' permutation tables as [`CurlNoise::forces`] gathers them.
+    wide: Box<WideTables>,
 }
 
 impl CurlNoise {
     /// `cell` is L in metres; `epsilon` is ε.
     pub fn new(seed: u64, cell: f64, epsilon: f64) -> Self {
         let l_scene = cell / SCENE_UNIT_M;
+        let potentials = [
+            Perlin::new(seed),
+            Perlin::new(seed ^ 0x1111),
+            Perlin::new(seed ^ 0x2222),
+        ];
         CurlNoise {
-            potentials: [
-                Perlin::new(seed),
-                Perlin::new(seed ^ 0x1111),
-                Perlin::new(seed ^ 0x2222),
-            ],
+            wide: Box::new(WideTables::new(&potentials)),
+            potentials,
             inv_cell: (1.0 / cell) as f32,
             gain: (epsilon / (l_scene * l_scene)) as f32,
         }
+    }
+
+    /// 1 / L, per metre.
+    pub(super) fn inv_cell(&self) -> f32 {
+        self.inv_cell
+    }
+
+    /// ε / L² with L in scene units.
+    pub(super) fn gain(&self) -> f32 {
+        self.gain
+    }
+
+    /// The potentials' permutation tables as [`CurlNoise::forces`] gathers them.
+    pub(super) fn hash_tables(&self) -> &WideTables {
+        &self.wide
     }
 
     /// F_curl at `p` (metres), as an acceleration in m/s².

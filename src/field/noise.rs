@@ -12,8 +12,15 @@ pub struct Perlin {
     perm: [u8; 512],
 }
 
+impl Perlin {
+    /// The permutation table (for `super::wide`'s own tables).
+    pub(super) fn perm(&self) -> &[u8; 512] {
+        &self.perm
+    }
+}
+
 /// The 12 edge-midpoint gradients of improved Perlin noise (plus 4 repeats to make 16).
-const GRADS: [[f32; 3]; 16] = [
+pub(super) const GRADS: [[f32; 3]; 16] = [
     [1.0, 1.0, 0.0],
     [-1.0, 1.0, 0.0],
     [1.0, -1.0, 0.0],

@@ -18,6 +18,7 @@ pub mod butterfly;
 pub mod collision;
 pub mod context;
 pub mod curl;
+pub mod curl_now;
 pub mod fastswarm;
 pub mod field;
 pub mod flight;
@@ -252,9 +253,10 @@ pub trait Model: Sized + Send + Sync {
     }
 
     /// Once per swarm per substep, before any agent steps, with the context the step pass
-    /// will see: for what a model derives from the world's moving parts (paper 001's path
-    /// field follows its goals). Nothing by default.
-    fn prepare(&mut self, _cx: &Context) {}
+    /// will see and the swarm's range in its agents: for what a model derives from the
+    /// world's moving parts (paper 001's path field follows its goals), or works out for
+    /// all its agents at once (the curl noise). Nothing by default.
+    fn prepare(&mut self, _cx: &Context, _agents: std::ops::Range<usize>) {}
 
     /// A new agent: the world drew its place, direction, size and speed from `rng`; the
     /// model draws the rest of its state from the same stream.

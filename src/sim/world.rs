@@ -340,7 +340,8 @@ where
     }
 
     fn step(&mut self, cx: &Context, cancel: &AtomicBool) {
-        self.model.prepare(cx);
+        self.model
+            .prepare(cx, self.start..self.start + self.agents.len());
         let (m, start) = (&self.model, self.start);
         let mut next = std::mem::take(&mut self.next);
         next.clear();

@@ -16,6 +16,7 @@ pub mod repulsion;
 pub use params::BeeParams;
 
 use super::context::{Context, Neighbour, TargetNow};
+use super::curl_now::CurlNow;
 use super::flight::{Avoidance, Cruiser, Flight, lag_blend};
 use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup, vision};
 use crate::field::CurlNoise;
@@ -143,6 +144,8 @@ pub struct BeeModel {
     phase_spread: f32,
     speed: f32,
     curl: CurlNoise,
+    /// Eq. 8–9's force at every bee of the swarm this substep (set by `prepare`).
+    curl_now: CurlNow,
     /// Eq. 3's and Eq. 4's phasors at the time of the substep being stepped, and that
     /// time, s (set by `prepare`, once per substep for the whole swarm).
     clock: (Phasor, Phasor),
@@ -205,14 +208,16 @@ impl Model for BeeModel {
                 p.noise_cell,
                 p.noise_gain,
             ),
+            curl_now: CurlNow::default(),
             clock: oscillation::clock(0.0),
             clock_t: 0.0,
         }
     }
 
-    fn prepare(&mut self, cx: &Context) {
+    fn prepare(&mut self, cx: &Context, agents: std::ops::Range<usize>) {
         self.clock = oscillation::clock(cx.t / self.time_unit);
         self.clock_t = cx.t;
+        self.curl_now.fill(&self.curl, cx, agents);
     }
 
     fn reach(&self) -> f32 {
@@ -460,7 +465,8 @@ impl Model for BeeModel {
         let drag = thrust / pref.max(1e-3);
         // Where Eq. 1's other forces send the bee. While avoiding, noise and pull are faded
         // out by the ramp γ.
-        let steer_noise_pull = gamma * (self.k2 * self.curl.force(c.pos) + a_attr);
+        let curl = self.curl_now.at(&self.curl, cx, i, c.pos);
+        let steer_noise_pull = gamma * (self.k2 * curl + a_attr);
         let want = steer_noise_pull + self.k3 * a_rep;
         // Hovering, sharp turns, backward flight: the stroke plane tilts the thrust (issue 17).
         let near = (1.0 - nearest_target / self.h).clamp(0.0, 1.0);

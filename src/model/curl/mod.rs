@@ -10,6 +10,7 @@
 //! are never entered (the shared keep-out guard).
 
 use super::context::Context;
+use super::curl_now::CurlNow;
 use super::flight::{self, Avoidance, Cruiser, Flyer, lag_blend};
 use super::params::DEFAULTS_ONLY;
 use super::{Model, ModelInfo, Pose, Start, SwarmSetup};
@@ -38,6 +39,8 @@ crate::declare_params! {
 
 pub struct CurlModel {
     field: CurlNoise,
+    /// The field at every agent of the swarm this substep (set by `prepare`).
+    field_now: CurlNow,
     /// speed / rms of the raw field.
     gain: f32,
     yaw_blend: f32,
@@ -88,6 +91,7 @@ impl Model for CurlModel {
         let gain = p.speed as f32 / rms(&field, p.noise_cell as f32);
         CurlModel {
             field,
+            field_now: CurlNow::default(),
             gain,
             yaw_blend: lag_blend(s.dt as f32, p.heading_lag as f32),
             attraction: p.attraction as f32,
@@ -110,7 +114,11 @@ impl Model for CurlModel {
         f
     }
 
-    fn step(&self, cx: &Context, _i: usize, b: &Flyer) -> Flyer {
+    fn prepare(&mut self, cx: &Context, agents: std::ops::Range<usize>) {
+        self.field_now.fill(&self.field, cx, agents);
+    }
+
+    fn step(&self, cx: &Context, i: usize, b: &Flyer) -> Flyer {
         let pull = flight::pull(
             cx,
             &self.targets,
@@ -119,7 +127,8 @@ impl Model for CurlModel {
             self.containment,
             b.c.pos,
         );
-        let vel = self.velocity(b.c.pos) + cx.wind + pull * self.response;
+        let field = self.field_now.at(&self.field, cx, i, b.c.pos) * self.gain;
+        let vel = field + cx.wind + pull * self.response;
         let ri = self.radius * b.c.size;
         let (pos, vel) = flight::keep_out(cx, b.c.pos, b.c.pos + vel * cx.dt, vel, ri);
         let yaw = flight::follow_heading(b.c.yaw, vel, Avoidance::default(), self.yaw_blend, cx.dt);

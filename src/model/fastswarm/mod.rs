@@ -17,6 +17,7 @@ pub mod selection;
 pub mod shape;
 
 use super::context::{Context, MAX_NEIGHBOURS};
+use super::curl_now::CurlNow;
 use super::flight::{self, Avoidance, Cruiser, Flyer, lag_blend};
 use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup};
 use crate::field::CurlNoise;
@@ -76,6 +77,9 @@ pub struct FastswarmModel {
     p: FastswarmParams,
     rho: f32,
     noise: CurlNoise,
+    /// The curl-noise field (Eq. 13's n̂) at every agent of the swarm this step (set by
+    /// `prepare`).
+    noise_now: CurlNow,
     /// The swarm centre of Eq. 7: the centre of the swarm's bounds (fixed; the paper's
     /// aggregation keeps "an unchanged swarm center").
     center: Option<Vec3>,
@@ -129,6 +133,7 @@ impl Model for FastswarmModel {
                 p.noise_cell,
                 1.0,
             ),
+            noise_now: CurlNow::default(),
             center: s.bounds.map(|(c, _)| c),
             targets: s.targets.clone(),
             radius: s.body.radius,
@@ -157,7 +162,8 @@ impl Model for FastswarmModel {
     /// the repulsion zone, by id: the order of Eq. 6's sum, who counts in a crowd past its
     /// limit, and which k are the nearest at equal distances must not depend on where the
     /// world stores the agents.
-    fn prepare(&mut self, cx: &Context) {
+    fn prepare(&mut self, cx: &Context, agents: std::ops::Range<usize>) {
+        self.noise_now.fill(&self.noise, cx, agents);
         // Cells as wide as the wider zone: the 27 around an agent hold both.
         let cell = (self.p.d_att2.max(self.p.d_rep) as f32).max(1e-4);
         let by_id = cx.indices_by_id();
@@ -258,7 +264,7 @@ impl Model for FastswarmModel {
             e.direction(p.w_cos as f32 * calm, c - pos);
         }
         e.direction(p.w_dir as f32, vel);
-        e.direction(p.w_n as f32, self.noise.force(pos));
+        e.direction(p.w_n as f32, self.noise_now.at(&self.noise, cx, i, pos));
         if self.shape_mode() {
             e.direction(
                 p.w_user as f32,

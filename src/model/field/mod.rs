@@ -176,7 +176,7 @@ impl Model for FieldModel {
         self.d_min
     }
 
-    fn prepare(&mut self, cx: &Context) {
+    fn prepare(&mut self, cx: &Context, _agents: std::ops::Range<usize>) {
         self.balls.clear();
         let mut goals = Vec::with_capacity(self.targets.len());
         for &ti in &self.targets {
