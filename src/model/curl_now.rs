@@ -43,8 +43,81 @@ impl CurlNow {
     #[inline]
     pub fn at(&self, curl: &CurlNoise, cx: &Context, i: usize, pos: Vec3) -> Vec3 {
         match self.forces.get(i.wrapping_sub(self.first)) {
-            Some(&f) if self.t == cx.t && cx.agents[i].pos == pos => f,
+            Some(&f) if self.t == cx.t && cx.agents.get(i).is_some_and(|r| r.pos == pos) => f,
             _ => curl.force(pos),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Neighbour;
+
+    fn context<'a>(t: f64, agents: &'a [Neighbour]) -> Context<'a> {
+        Context {
+            t,
+            dt: 0.01,
+            step: 0,
+            seed: 1,
+            wind: Vec3::ZERO,
+            obstacles: &[],
+            obstacles_before: &[],
+            targets: &[],
+            max_body_radius: 0.0,
+            agents,
+            lists: &[],
+            ids: &[],
+            slots: &[],
+        }
+    }
+
+    #[test]
+    fn each_agent_reads_its_own_force_and_anything_else_is_worked_out() {
+        let curl = CurlNoise::new(9, 0.11, 2.0);
+        let mut rng = crate::math::Rng::new(3, 4, 5);
+        // 300 agents, the swarm the 37 from index 200 (not a multiple of sixteen).
+        let agents: Vec<Neighbour> = (0..300)
+            .map(|_| Neighbour {
+                pos: Vec3::new(
+                    rng.range(-2.0, 2.0),
+                    rng.range(-2.0, 2.0),
+                    rng.range(-2.0, 2.0),
+                ),
+                ..Neighbour::default()
+            })
+            .collect();
+        let cx = context(0.5, &agents);
+        let mut now = CurlNow::default();
+        now.fill(&curl, &cx, 200..237);
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for (k, a) in agents[200..237].iter().enumerate() {
+            assert_eq!(bits(now.forces[k]), bits(curl.force(a.pos)));
+        }
+        // Which stored force a step reads: marked, its own and only its own.
+        for (k, f) in now.forces.iter_mut().enumerate() {
+            *f = Vec3::splat(k as f32 + 0.5);
+        }
+        for (i, a) in agents.iter().enumerate().take(237).skip(200) {
+            assert_eq!(
+                now.at(&curl, &cx, i, a.pos),
+                Vec3::splat((i - 200) as f32 + 0.5)
+            );
+        }
+        // Another agent's position, an agent of another swarm, another substep: worked
+        // out where asked.
+        let elsewhere = agents[201].pos;
+        assert_eq!(
+            bits(now.at(&curl, &cx, 200, elsewhere)),
+            bits(curl.force(elsewhere))
+        );
+        let other = agents[5].pos;
+        assert_eq!(bits(now.at(&curl, &cx, 5, other)), bits(curl.force(other)));
+        let later = context(0.51, &agents);
+        let mine = agents[210].pos;
+        assert_eq!(
+            bits(now.at(&curl, &later, 210, mine)),
+            bits(curl.force(mine))
+        );
     }
 }
