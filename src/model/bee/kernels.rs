@@ -30,6 +30,11 @@ impl Kernels {
         let x = self.h2 - s * s;
         self.poly6_coef * x * x * x
     }
+    /// 45 / (π h⁶), the spiky gradient's factor (`pairs` works the gradient out itself).
+    #[inline]
+    pub fn spiky_coef(&self) -> f32 {
+        self.spiky_coef
+    }
     /// −dW_spiky/ds for kernel distance s ≥ 0.
     #[inline]
     pub fn spiky_grad_mag(&self, s: f32) -> f32 {

@@ -10,6 +10,7 @@ pub mod hive;
 pub mod kernels;
 pub mod manoeuvre;
 pub mod oscillation;
+mod pairs;
 pub mod params;
 pub mod repulsion;
 
@@ -301,22 +302,23 @@ impl Model for BeeModel {
         let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
         let mut out = *b;
 
-        // Neighbours: pressure repulsion (Eq. 11) and contact springs (Sec. VII).
-        let mut a_rep = Vec3::ZERO;
-        let mut a_col = Vec3::ZERO;
-        // Locals, so that the neighbour loop reads registers rather than chasing `self`.
-        let (pos, vel, agents, kernels) = (c.pos, c.vel, cx.agents, &self.kernels);
-        cx.for_each_neighbour(i, self.h + ri + cx.max_body_radius, |j, pj, d2| {
-            let o = &agents[j];
-            let (r, dist) = (pos - pj, d2.sqrt());
-            let contact = ri + o.radius;
-            let fallback = || cx.separation_fallback(i, j);
-            let rho_j = if o.density > 0.0 { o.density } else { density };
-            a_rep += repulsion::pressure_term(
-                kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j, fallback,
-            );
-            a_col += self.flight.contact(fallback, contact, r, dist, vel - o.vel);
-        });
+        // Neighbours: pressure repulsion (Eq. 11) and contact springs (Sec. VII), a whole
+        // list at once where the CPU allows (`pairs`), else one neighbour at a time.
+        let reach = self.h + ri + cx.max_body_radius;
+        let wide = pairs::Bee {
+            kernels: &self.kernels,
+            pos: c.pos,
+            vel: c.vel,
+            radius: ri,
+            density,
+            pressure,
+            reach2: reach * reach,
+            spring: self.flight.spring,
+        };
+        let (mut a_rep, a_col) = match pairs::sums(cx.agents, cx.lists[i].indices(), &wide) {
+            Some(sums) => sums,
+            None => self.pairs_one_by_one(cx, i, c, ri, reach),
+        };
 
         // Targets: attraction, and the push of their virtual particles.
         let a_attr = self.flight.pull(cx, c.pos);
@@ -525,6 +527,36 @@ impl Model for BeeModel {
 }
 
 impl BeeModel {
+    /// The sums of Eq. 11's pressure terms and Sec. VII's contact springs over bee `i`'s
+    /// neighbours within `reach`, one neighbour at a time (as `pairs::sums` does them all
+    /// at once).
+    fn pairs_one_by_one(
+        &self,
+        cx: &Context,
+        i: usize,
+        c: &Cruiser,
+        ri: f32,
+        reach: f32,
+    ) -> (Vec3, Vec3) {
+        let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
+        let mut a_rep = Vec3::ZERO;
+        let mut a_col = Vec3::ZERO;
+        // Locals, so that the neighbour loop reads registers rather than chasing `self`.
+        let (pos, vel, agents, kernels) = (c.pos, c.vel, cx.agents, &self.kernels);
+        cx.for_each_neighbour(i, reach, |j, pj, d2| {
+            let o = &agents[j];
+            let (r, dist) = (pos - pj, d2.sqrt());
+            let contact = ri + o.radius;
+            let fallback = || cx.separation_fallback(i, j);
+            let rho_j = if o.density > 0.0 { o.density } else { density };
+            a_rep += repulsion::pressure_term(
+                kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j, fallback,
+            );
+            a_col += self.flight.contact(fallback, contact, r, dist, vel - o.vel);
+        });
+        (a_rep, a_col)
+    }
+
     /// After a flying substep: lands the bee on a target with `land = true` whose surface
     /// its body touches (once it may land again), and records hovering.
     fn touch_down(&self, cx: &Context, i: usize, out: &mut Bee, ri: f32) {

@@ -1,0 +1,304 @@
+//! A bee's pair terms with its listed neighbours, Eq. 11's pressure push and Sec. VII's
+//! contact spring, sixteen neighbours at a time with AVX-512: each lane does exactly the
+//! arithmetic of [`super::repulsion::pressure_term`] and [`crate::model::collision`]'s
+//! spring for its neighbour (no fused multiply-add), and the terms are then added in the
+//! list's order, so the sums are the same bits as the one-at-a-time loop in the bee's
+//! step. A list holds at most sixteen, so one group of lanes takes a whole list; its
+//! square root and four divisions per neighbour become one instruction each.
+
+use super::kernels::Kernels;
+use crate::model::context::{MAX_NEIGHBOURS, Neighbour};
+use glam::Vec3;
+
+/// Lists at least this long take the sixteen lanes: for shorter ones (a sparse swarm's
+/// seven or so) gathering the neighbours' fields into lanes costs more than the loop.
+const WIDE_FROM: usize = 8;
+
+/// What the pair terms of one bee need besides its neighbours.
+pub(super) struct Bee<'a> {
+    pub kernels: &'a Kernels,
+    pub pos: Vec3,
+    pub vel: Vec3,
+    /// Body radius, m.
+    pub radius: f32,
+    pub density: f32,
+    pub pressure: f32,
+    /// Neighbours farther than this are left out, m (squared).
+    pub reach2: f32,
+    /// Contact spring stiffness, 1/s².
+    pub spring: f32,
+}
+
+/// The sums over `list` (indices into `agents`) of the pressure terms and the contact
+/// springs, as the step's loop adds them; `None` where the CPU lacks AVX-512, or where a
+/// neighbour within reach coincides with the bee (the loop's fallback direction then
+/// separates them).
+#[inline]
+pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
+    #[cfg(target_arch = "x86_64")]
+    if list.len() >= WIDE_FROM && std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512 F (checked above).
+        return unsafe { sums16(agents, list, bee) };
+    }
+    let _ = (agents, list, bee);
+    None
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sums16(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
+    use std::arch::x86_64::*;
+    const _: () = assert!(MAX_NEIGHBOURS <= 16);
+    let n = list.len().min(MAX_NEIGHBOURS);
+    let valid: __mmask16 = ((1u32 << n) - 1) as u16;
+    // SAFETY: lanes past `n` are masked out of the load.
+    let idx = unsafe { _mm512_maskz_loadu_epi32(valid, list.as_ptr().cast()) };
+    // Every index must lie in `agents` before it is gathered from.
+    let len = _mm512_set1_epi32(agents.len().min(i32::MAX as usize) as i32);
+    if _mm512_mask_cmpge_epu32_mask(valid, idx, len) != 0 {
+        return None;
+    }
+    // The records, ten f32s each, gathered two f32s at a time (each half of the list's
+    // indices gathers eight pairs), then each pair split into its two fields' lanes.
+    const WORDS: usize = size_of::<Neighbour>() / 8;
+    const _: () = assert!(size_of::<Neighbour>() == 40);
+    let base = _mm512_mullo_epi32(idx, _mm512_set1_epi32(WORDS as i32));
+    let (lo_half, hi_half) = (
+        _mm512_castsi512_si256(base),
+        _mm512_extracti64x4_epi64::<1>(base),
+    );
+    let (even, odd) = (
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
+        _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
+    );
+    let mut floats = [_mm512_setzero_ps(); 10];
+    for w in 0..WORDS {
+        let gather = |half: __m256i, mask: __mmask8| {
+            let at = _mm256_add_epi32(half, _mm256_set1_epi32(w as i32));
+            // SAFETY: every index is below `agents.len()` (checked above) and word w
+            // lies within its record: the reads stay inside `agents`.
+            unsafe {
+                _mm512_mask_i32gather_epi64::<8>(
+                    _mm512_setzero_si512(),
+                    mask,
+                    at,
+                    agents.as_ptr().cast(),
+                )
+            }
+        };
+        let lo = _mm512_castsi512_ps(gather(lo_half, valid as u8));
+        let hi = _mm512_castsi512_ps(gather(hi_half, (valid >> 8) as u8));
+        floats[2 * w] = _mm512_permutex2var_ps(lo, even, hi);
+        floats[2 * w + 1] = _mm512_permutex2var_ps(lo, odd, hi);
+    }
+    let field = |offset: usize| floats[offset / 4];
+    let (pos, vel) = (
+        std::mem::offset_of!(Neighbour, pos),
+        std::mem::offset_of!(Neighbour, vel),
+    );
+    let (px, py, pz) = (field(pos), field(pos + 4), field(pos + 8));
+    let (vx, vy, vz) = (field(vel), field(vel + 4), field(vel + 8));
+    let radius = field(std::mem::offset_of!(Neighbour, radius));
+    let mass = field(std::mem::offset_of!(Neighbour, mass));
+    let density = field(std::mem::offset_of!(Neighbour, density));
+    let pressure = field(std::mem::offset_of!(Neighbour, pressure));
+
+    let splat = _mm512_set1_ps;
+    let (add, sub, mul, div) = (
+        |a, b| _mm512_add_ps(a, b),
+        |a, b| _mm512_sub_ps(a, b),
+        |a, b| _mm512_mul_ps(a, b),
+        |a, b| _mm512_div_ps(a, b),
+    );
+    let zero = _mm512_setzero_ps();
+    // r = bee − neighbour; `for_each_neighbour`'s squared distance and reach.
+    let (rx, ry, rz) = (
+        sub(splat(bee.pos.x), px),
+        sub(splat(bee.pos.y), py),
+        sub(splat(bee.pos.z), pz),
+    );
+    let d2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
+    let within = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(valid, d2, splat(bee.reach2));
+    let dist = _mm512_sqrt_ps(d2);
+    // Coincident bodies take the loop's fallback direction.
+    if _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(within, dist, splat(1e-9)) != within {
+        return None;
+    }
+    let (dx, dy, dz) = (div(rx, dist), div(ry, dist), div(rz, dist));
+    let contact = add(splat(bee.radius), radius);
+
+    // Eq. 11 (`repulsion::pressure_term`).
+    let k = bee.kernels;
+    let s = _mm512_max_ps(sub(dist, contact), zero);
+    let rho_i = splat(bee.density);
+    let rho_j = _mm512_mask_blend_ps(
+        _mm512_cmp_ps_mask::<_CMP_GT_OQ>(density, zero),
+        rho_i,
+        density,
+    );
+    let p_sum = add(splat(bee.pressure), pressure);
+    let pushes = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(within, s, splat(k.h))
+        & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(rho_j, zero)
+        & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(p_sum, zero);
+    let pushes = if bee.density > 0.0 { pushes } else { 0 };
+    let x = sub(splat(k.h), s);
+    let grad = mul(mul(splat(k.spiky_coef()), x), x);
+    let scale = div(
+        mul(mul(grad, mass), p_sum),
+        mul(mul(splat(2.0), rho_i), rho_j),
+    );
+    let rep = [dx, dy, dz].map(|d| _mm512_maskz_mul_ps(pushes, d, scale));
+
+    // Sec. VII (`collision::spring_accel`).
+    let overlap = sub(contact, dist);
+    let touches = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(within, overlap, zero);
+    let (wx, wy, wz) = (
+        sub(splat(bee.vel.x), vx),
+        sub(splat(bee.vel.y), vy),
+        sub(splat(bee.vel.z), vz),
+    );
+    let closing = _mm512_min_ps(add(add(mul(wx, dx), mul(wy, dy)), mul(wz, dz)), zero);
+    let spring = splat(bee.spring);
+    let damping = splat(2.0 * bee.spring.sqrt());
+    let push = sub(mul(spring, overlap), mul(damping, closing));
+    let col = [dx, dy, dz].map(|d| _mm512_maskz_mul_ps(touches, d, push));
+
+    // Added in the list's order, every neighbour within reach (a zero term too, as the
+    // loop adds it).
+    let lanes = |v: __m512| {
+        let mut a = [0.0f32; 16];
+        // SAFETY: `a` holds sixteen f32s.
+        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), v) };
+        a
+    };
+    let (rep, col) = (rep.map(lanes), col.map(lanes));
+    let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
+    let mut left = within;
+    while left != 0 {
+        let l = left.trailing_zeros() as usize;
+        left &= left - 1;
+        a_rep += Vec3::new(rep[0][l], rep[1][l], rep[2][l]);
+        a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
+    }
+    Some((a_rep, a_col))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::bee::repulsion;
+    use crate::model::collision;
+
+    /// The step's loop, one neighbour at a time (`BeeModel::pairs_one_by_one`'s sums).
+    fn one_by_one(agents: &[Neighbour], list: &[u32], bee: &Bee) -> (Vec3, Vec3) {
+        let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
+        for &j in list {
+            let o = &agents[j as usize];
+            let d2 = bee.pos.distance_squared(o.pos);
+            if d2 >= bee.reach2 {
+                continue;
+            }
+            let (r, dist) = (bee.pos - o.pos, d2.sqrt());
+            let contact = bee.radius + o.radius;
+            let rho_j = if o.density > 0.0 {
+                o.density
+            } else {
+                bee.density
+            };
+            a_rep += repulsion::pressure_term(
+                bee.kernels,
+                r,
+                dist,
+                contact,
+                o.mass,
+                bee.pressure,
+                o.pressure,
+                bee.density,
+                rho_j,
+                || Vec3::Y,
+            );
+            let rel = bee.vel - o.vel;
+            a_col += collision::spring_accel(r, dist, contact, rel, bee.spring, || Vec3::Y);
+        }
+        (a_rep, a_col)
+    }
+
+    #[test]
+    fn a_whole_list_at_once_sums_what_the_loop_sums_bit_for_bit() {
+        let kernels = Kernels::new(0.15);
+        let mut rng = crate::math::Rng::new(8, 9, 10);
+        // A tight cloud, so that bodies touch, densities and pressures of every kind
+        // (zero density: a record not yet gathered; zero pressure: below rest density).
+        let agents: Vec<Neighbour> = (0..400)
+            .map(|_| Neighbour {
+                pos: Vec3::new(
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                ),
+                radius: rng.range(0.003, 0.008),
+                vel: Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                ),
+                mass: rng.range(5e-5, 2e-4),
+                density: if rng.f32() < 0.2 {
+                    0.0
+                } else {
+                    rng.range(0.5, 50.0)
+                },
+                pressure: if rng.f32() < 0.3 {
+                    0.0
+                } else {
+                    rng.range(0.0, 20.0)
+                },
+            })
+            .collect();
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut wide = 0;
+        for case in 0..4000 {
+            let n = case % 17;
+            let list: Vec<u32> = (0..n).map(|_| (rng.f32() * 400.0) as u32 % 400).collect();
+            let me = &agents[(rng.f32() * 400.0) as usize % 400];
+            let bee = Bee {
+                kernels: &kernels,
+                pos: me.pos,
+                vel: me.vel,
+                radius: me.radius,
+                density: [0.0, me.density, 10.0][case % 3],
+                pressure: [0.0, me.pressure][case % 2],
+                reach2: [0.16f32, 0.05, 0.02][case % 3].powi(2),
+                spring: [4000.0, 0.0][(case / 7) % 2],
+            };
+            let want = one_by_one(&agents, &list, &bee);
+            // A list that holds the bee itself coincides with it: the loop's fallback.
+            let coincident = list.iter().any(|&j| agents[j as usize].pos == me.pos);
+            match sums(&agents, &list, &bee) {
+                Some(got) => {
+                    assert!(!coincident);
+                    assert_eq!(
+                        (bits(got.0), bits(got.1)),
+                        (bits(want.0), bits(want.1)),
+                        "case {case}"
+                    );
+                    wide += 1;
+                }
+                None => assert!(coincident || list.len() < WIDE_FROM || !wide_cpu()),
+            }
+        }
+        // Where the CPU has AVX-512, most cases went through the lanes.
+        assert!(!wide_cpu() || wide > 1500, "{wide} cases through the lanes");
+    }
+
+    fn wide_cpu() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx512f")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+}
