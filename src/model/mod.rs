@@ -268,6 +268,20 @@ pub trait Model: Sized + Send + Sync {
         0.0
     }
 
+    /// The gather pass's sum over a whole neighbour list (`agents` by index) at once, from
+    /// `own` (the agent's own term), where the model can: the same bits as adding
+    /// `gather_term` one neighbour at a time in the list's order. `None` (the default):
+    /// one at a time.
+    fn gather_list(
+        &self,
+        _me: &Neighbour,
+        _agents: &[Neighbour],
+        _list: &[u32],
+        _own: f32,
+    ) -> Option<f32> {
+        None
+    }
+
     /// Gather pass, per agent: (density, pressure) from the neighbours' sum.
     fn gather_finish(&self, _targets: &[TargetNow], _pos: Vec3, _ri: f32, _sum: f32) -> (f32, f32) {
         (0.0, 0.0)

@@ -238,11 +238,17 @@ where
             }
             let me = &agents[i];
             let ri = me.radius;
-            let mut sum = m.gather_term(ri, me, 0.0);
-            for &j in list.indices() {
-                let o = &agents[j as usize];
-                sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
-            }
+            let own = m.gather_term(ri, me, 0.0);
+            let sum = m
+                .gather_list(me, agents, list.indices(), own)
+                .unwrap_or_else(|| {
+                    let mut sum = own;
+                    for &j in list.indices() {
+                        let o = &agents[j as usize];
+                        sum += m.gather_term(ri, o, me.pos.distance_squared(o.pos));
+                    }
+                    sum
+                });
             m.gather_finish(targets, me.pos, ri, sum)
         };
         let radius = |i: usize| m.reach() + agents[i].radius + max_body_radius;

@@ -30,6 +30,11 @@ impl Kernels {
         let x = self.h2 - s * s;
         self.poly6_coef * x * x * x
     }
+    /// 315 / (64 π h⁹), Poly6's factor (`pairs` works the kernel out itself).
+    #[inline]
+    pub fn poly6_coef(&self) -> f32 {
+        self.poly6_coef
+    }
     /// 45 / (π h⁶), the spiky gradient's factor (`pairs` works the gradient out itself).
     #[inline]
     pub fn spiky_coef(&self) -> f32 {

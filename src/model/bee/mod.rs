@@ -267,6 +267,16 @@ impl Model for BeeModel {
         repulsion::density_term(&self.kernels, o.mass, d2.sqrt(), ri + o.radius)
     }
 
+    fn gather_list(
+        &self,
+        me: &Neighbour,
+        agents: &[Neighbour],
+        list: &[u32],
+        own: f32,
+    ) -> Option<f32> {
+        pairs::density_sum(&self.kernels, agents, list, me, me.radius, own)
+    }
+
     fn gather_finish(&self, targets: &[TargetNow], pos: Vec3, ri: f32, sum: f32) -> (f32, f32) {
         let mut rho = sum;
         for &ti in &self.flight.targets {

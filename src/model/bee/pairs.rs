@@ -1,10 +1,11 @@
-//! A bee's pair terms with its listed neighbours, Eq. 11's pressure push and Sec. VII's
-//! contact spring, sixteen neighbours at a time with AVX-512: each lane does exactly the
-//! arithmetic of [`super::repulsion::pressure_term`] and [`crate::model::collision`]'s
-//! spring for its neighbour (no fused multiply-add), and the terms are then added in the
-//! list's order, so the sums are the same bits as the one-at-a-time loop in the bee's
-//! step. A list holds at most sixteen, so one group of lanes takes a whole list; its
-//! square root and four divisions per neighbour become one instruction each.
+//! A bee's sums over its listed neighbours, sixteen neighbours at a time with AVX-512:
+//! Eq. 10's density (the gather pass) and Eq. 11's pressure push with Sec. VII's contact
+//! spring (the step). Each lane does exactly the arithmetic of
+//! [`super::repulsion::density_term`], [`super::repulsion::pressure_term`] and
+//! [`crate::model::collision`]'s spring for its neighbour (no fused multiply-add), and
+//! the terms are then added in the list's order, so the sums are the same bits as the
+//! one-at-a-time loops. A list holds at most sixteen, so one group of lanes takes a whole
+//! list; its square roots and divisions become one instruction each.
 
 use super::kernels::Kernels;
 use crate::model::context::{MAX_NEIGHBOURS, Neighbour};
@@ -48,49 +49,8 @@ pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec
 #[target_feature(enable = "avx512f")]
 unsafe fn sums16(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     use std::arch::x86_64::*;
-    const _: () = assert!(MAX_NEIGHBOURS <= 16);
-    let n = list.len().min(MAX_NEIGHBOURS);
-    let valid: __mmask16 = ((1u32 << n) - 1) as u16;
-    // SAFETY: lanes past `n` are masked out of the load.
-    let idx = unsafe { _mm512_maskz_loadu_epi32(valid, list.as_ptr().cast()) };
-    // Every index must lie in `agents` before it is gathered from.
-    let len = _mm512_set1_epi32(agents.len().min(i32::MAX as usize) as i32);
-    if _mm512_mask_cmpge_epu32_mask(valid, idx, len) != 0 {
-        return None;
-    }
-    // The records, ten f32s each, gathered two f32s at a time (each half of the list's
-    // indices gathers eight pairs), then each pair split into its two fields' lanes.
-    const WORDS: usize = size_of::<Neighbour>() / 8;
-    const _: () = assert!(size_of::<Neighbour>() == 40);
-    let base = _mm512_mullo_epi32(idx, _mm512_set1_epi32(WORDS as i32));
-    let (lo_half, hi_half) = (
-        _mm512_castsi512_si256(base),
-        _mm512_extracti64x4_epi64::<1>(base),
-    );
-    let (even, odd) = (
-        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
-        _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
-    );
-    let mut floats = [_mm512_setzero_ps(); 10];
-    for w in 0..WORDS {
-        let gather = |half: __m256i, mask: __mmask8| {
-            let at = _mm256_add_epi32(half, _mm256_set1_epi32(w as i32));
-            // SAFETY: every index is below `agents.len()` (checked above) and word w
-            // lies within its record: the reads stay inside `agents`.
-            unsafe {
-                _mm512_mask_i32gather_epi64::<8>(
-                    _mm512_setzero_si512(),
-                    mask,
-                    at,
-                    agents.as_ptr().cast(),
-                )
-            }
-        };
-        let lo = _mm512_castsi512_ps(gather(lo_half, valid as u8));
-        let hi = _mm512_castsi512_ps(gather(hi_half, (valid >> 8) as u8));
-        floats[2 * w] = _mm512_permutex2var_ps(lo, even, hi);
-        floats[2 * w + 1] = _mm512_permutex2var_ps(lo, odd, hi);
-    }
+    // SAFETY: the CPU has AVX-512 F (this function's own target).
+    let (valid, floats) = unsafe { records16(agents, list, ALL_WORDS) }?;
     let field = |offset: usize| floats[offset / 4];
     let (pos, vel) = (
         std::mem::offset_of!(Neighbour, pos),
@@ -181,6 +141,154 @@ unsafe fn sums16(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3,
         a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
     }
     Some((a_rep, a_col))
+}
+
+/// A record's five pairs of f32s, by bit: all of them.
+#[cfg(target_arch = "x86_64")]
+const ALL_WORDS: u8 = 0b11111;
+
+/// The records of `list` (at most sixteen indices into `agents`), field by field in the
+/// lanes of ten vectors (f32 `k` of each record in vector `k`; lanes past the list are
+/// zero), and the mask of the list's lanes; only the pairs of f32s whose bits are set in
+/// `words` are read (the rest stay zero). `None` if the list is longer than sixteen or an
+/// index lies outside `agents`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn records16(
+    agents: &[Neighbour],
+    list: &[u32],
+    words: u8,
+) -> Option<(
+    std::arch::x86_64::__mmask16,
+    [std::arch::x86_64::__m512; 10],
+)> {
+    use std::arch::x86_64::*;
+    const _: () = assert!(MAX_NEIGHBOURS <= 16);
+    if list.len() > 16 {
+        return None;
+    }
+    let valid: __mmask16 = ((1u32 << list.len()) - 1) as u16;
+    // SAFETY: lanes past `n` are masked out of the load.
+    let idx = unsafe { _mm512_maskz_loadu_epi32(valid, list.as_ptr().cast()) };
+    // Every index must lie in `agents` before it is gathered from.
+    let len = _mm512_set1_epi32(agents.len().min(i32::MAX as usize) as i32);
+    if _mm512_mask_cmpge_epu32_mask(valid, idx, len) != 0 {
+        return None;
+    }
+    // The records, ten f32s each, gathered two f32s at a time (each half of the list's
+    // indices gathers eight pairs), then each pair split into its two fields' lanes.
+    const WORDS: usize = size_of::<Neighbour>() / 8;
+    const _: () = assert!(size_of::<Neighbour>() == 40);
+    let base = _mm512_mullo_epi32(idx, _mm512_set1_epi32(WORDS as i32));
+    let (lo_half, hi_half) = (
+        _mm512_castsi512_si256(base),
+        _mm512_extracti64x4_epi64::<1>(base),
+    );
+    let (even, odd) = (
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
+        _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
+    );
+    let mut floats = [_mm512_setzero_ps(); 10];
+    for w in 0..WORDS {
+        if words & (1 << w) == 0 {
+            continue;
+        }
+        let gather = |half: __m256i, mask: __mmask8| {
+            let at = _mm256_add_epi32(half, _mm256_set1_epi32(w as i32));
+            // SAFETY: every index is below `agents.len()` (checked above) and word w
+            // lies within its record: the reads stay inside `agents`.
+            unsafe {
+                _mm512_mask_i32gather_epi64::<8>(
+                    _mm512_setzero_si512(),
+                    mask,
+                    at,
+                    agents.as_ptr().cast(),
+                )
+            }
+        };
+        let lo = _mm512_castsi512_ps(gather(lo_half, valid as u8));
+        let hi = _mm512_castsi512_ps(gather(hi_half, (valid >> 8) as u8));
+        floats[2 * w] = _mm512_permutex2var_ps(lo, even, hi);
+        floats[2 * w + 1] = _mm512_permutex2var_ps(lo, odd, hi);
+    }
+    Some((valid, floats))
+}
+
+/// Eq. 10's density sum over `list` for the bee whose record is `me` and body radius
+/// `ri`, starting from `own` (its own term), as the gather pass adds it one neighbour at a
+/// time (`BeeModel::gather_term`); `None` where the CPU lacks AVX-512 or the list is short.
+#[inline]
+pub(super) fn density_sum(
+    kernels: &Kernels,
+    agents: &[Neighbour],
+    list: &[u32],
+    me: &Neighbour,
+    ri: f32,
+    own: f32,
+) -> Option<f32> {
+    #[cfg(target_arch = "x86_64")]
+    if list.len() >= WIDE_FROM && std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512 F (checked above).
+        return unsafe { density16(kernels, agents, list, me, ri, own) };
+    }
+    let _ = (kernels, agents, list, me, ri, own);
+    None
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn density16(
+    k: &Kernels,
+    agents: &[Neighbour],
+    list: &[u32],
+    me: &Neighbour,
+    ri: f32,
+    own: f32,
+) -> Option<f32> {
+    use std::arch::x86_64::*;
+    let (pos, radius, mass) = (
+        std::mem::offset_of!(Neighbour, pos),
+        std::mem::offset_of!(Neighbour, radius),
+        std::mem::offset_of!(Neighbour, mass),
+    );
+    // Only the pairs that hold the position, body radius and mass.
+    let words = [pos, pos + 4, pos + 8, radius, mass]
+        .iter()
+        .fold(0u8, |w, &o| w | 1 << (o / 8));
+    // SAFETY: the CPU has AVX-512 F (this function's own target).
+    let (valid, floats) = unsafe { records16(agents, list, words) }?;
+    let field = |offset: usize| floats[offset / 4];
+    let splat = _mm512_set1_ps;
+    // `me.pos.distance_squared(o.pos)`: (me − o)², summed x, y, z.
+    let (rx, ry, rz) = (
+        _mm512_sub_ps(splat(me.pos.x), field(pos)),
+        _mm512_sub_ps(splat(me.pos.y), field(pos + 4)),
+        _mm512_sub_ps(splat(me.pos.z), field(pos + 8)),
+    );
+    let d2 = _mm512_add_ps(
+        _mm512_add_ps(_mm512_mul_ps(rx, rx), _mm512_mul_ps(ry, ry)),
+        _mm512_mul_ps(rz, rz),
+    );
+    // `repulsion::density_term`: m_j W_poly6(max(d − (r_i + r_j), 0)), zero from h on.
+    let contact = _mm512_add_ps(splat(ri), field(radius));
+    let s = _mm512_max_ps(
+        _mm512_sub_ps(_mm512_sqrt_ps(d2), contact),
+        _mm512_setzero_ps(),
+    );
+    let inside = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(valid, s, splat(k.h));
+    let x = _mm512_sub_ps(splat(k.h * k.h), _mm512_mul_ps(s, s));
+    let w = _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(splat(k.poly6_coef()), x), x), x);
+    // m_j · 0 where the kernel is zero, as the loop multiplies it.
+    let terms = _mm512_mul_ps(field(mass), _mm512_maskz_mov_ps(inside, w));
+    let mut lanes = [0.0f32; 16];
+    // SAFETY: `lanes` holds sixteen f32s.
+    unsafe { _mm512_storeu_ps(lanes.as_mut_ptr(), terms) };
+    // Added in the list's order (a zero term too, as the loop adds it).
+    let mut sum = own;
+    for t in &lanes[..list.len()] {
+        sum += t;
+    }
+    Some(sum)
 }
 
 #[cfg(test)]
@@ -288,6 +396,47 @@ mod tests {
             }
         }
         // Where the CPU has AVX-512, most cases went through the lanes.
+        assert!(!wide_cpu() || wide > 1500, "{wide} cases through the lanes");
+    }
+
+    #[test]
+    fn a_whole_list_at_once_sums_the_density_the_loop_sums_bit_for_bit() {
+        let kernels = Kernels::new(0.15);
+        let mut rng = crate::math::Rng::new(11, 12, 13);
+        // Spread beyond the kernel's reach, so that some terms are zero.
+        let agents: Vec<Neighbour> = (0..300)
+            .map(|_| Neighbour {
+                pos: Vec3::new(
+                    rng.range(-0.2, 0.2),
+                    rng.range(-0.2, 0.2),
+                    rng.range(-0.2, 0.2),
+                ),
+                radius: rng.range(0.003, 0.008),
+                mass: rng.range(5e-5, 2e-4),
+                ..Neighbour::default()
+            })
+            .collect();
+        let mut wide = 0;
+        for case in 0..4000 {
+            let list: Vec<u32> = (0..case % 17)
+                .map(|_| (rng.f32() * 300.0) as u32 % 300)
+                .collect();
+            let me = &agents[case % 300];
+            let own = repulsion::density_term(&kernels, me.mass, 0.0, 2.0 * me.radius);
+            let mut want = own;
+            for &j in &list {
+                let o = &agents[j as usize];
+                let d = me.pos.distance_squared(o.pos).sqrt();
+                want += repulsion::density_term(&kernels, o.mass, d, me.radius + o.radius);
+            }
+            match density_sum(&kernels, &agents, &list, me, me.radius, own) {
+                Some(got) => {
+                    assert_eq!(got.to_bits(), want.to_bits(), "case {case}");
+                    wide += 1;
+                }
+                None => assert!(list.len() < WIDE_FROM || !wide_cpu()),
+            }
+        }
         assert!(!wide_cpu() || wide > 1500, "{wide} cases through the lanes");
     }
 
