@@ -77,13 +77,10 @@ mod tests {
         let curl = CurlNoise::new(9, 0.11, 2.0);
         let mut rng = crate::math::Rng::new(3, 4, 5);
         // 300 agents, the swarm the 37 from index 200 (not a multiple of sixteen).
-        let agents: Vec<Neighbour> = (0..300)
-            .map(|_| Neighbour {
-                pos: Vec3::new(
-                    rng.range(-2.0, 2.0),
-                    rng.range(-2.0, 2.0),
-                    rng.range(-2.0, 2.0),
-                ),
+        let agents: Vec<Neighbour> = crate::math::random_cloud(&mut rng, 300, 2.0)
+            .into_iter()
+            .map(|pos| Neighbour {
+                pos,
                 ..Neighbour::default()
             })
             .collect();

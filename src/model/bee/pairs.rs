@@ -294,6 +294,7 @@ unsafe fn density16(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::random_cloud;
     use crate::model::bee::repulsion;
     use crate::model::collision;
 
@@ -337,19 +338,13 @@ mod tests {
         let mut rng = crate::math::Rng::new(8, 9, 10);
         // A tight cloud, so that bodies touch, densities and pressures of every kind
         // (zero density: a record not yet gathered; zero pressure: below rest density).
+        let cloud = random_cloud(&mut rng, 400, 0.1);
+        let velocities = random_cloud(&mut rng, 400, 1.0);
         let agents: Vec<Neighbour> = (0..400)
-            .map(|_| Neighbour {
-                pos: Vec3::new(
-                    rng.range(-0.1, 0.1),
-                    rng.range(-0.1, 0.1),
-                    rng.range(-0.1, 0.1),
-                ),
+            .map(|k| Neighbour {
+                pos: cloud[k],
                 radius: rng.range(0.003, 0.008),
-                vel: Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                ),
+                vel: velocities[k],
                 mass: rng.range(5e-5, 2e-4),
                 density: if rng.f32() < 0.2 {
                     0.0
@@ -404,13 +399,10 @@ mod tests {
         let kernels = Kernels::new(0.15);
         let mut rng = crate::math::Rng::new(11, 12, 13);
         // Spread beyond the kernel's reach, so that some terms are zero.
-        let agents: Vec<Neighbour> = (0..300)
-            .map(|_| Neighbour {
-                pos: Vec3::new(
-                    rng.range(-0.2, 0.2),
-                    rng.range(-0.2, 0.2),
-                    rng.range(-0.2, 0.2),
-                ),
+        let agents: Vec<Neighbour> = random_cloud(&mut rng, 300, 0.2)
+            .into_iter()
+            .map(|pos| Neighbour {
+                pos,
                 radius: rng.range(0.003, 0.008),
                 mass: rng.range(5e-5, 2e-4),
                 ..Neighbour::default()
