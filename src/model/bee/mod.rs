@@ -274,7 +274,7 @@ impl Model for BeeModel {
         list: &[u32],
         own: f32,
     ) -> Option<f32> {
-        pairs::density_sum(&self.kernels, agents, list, me, me.radius, own)
+        pairs::density_sum(&self.kernels, agents, list, me, own)
     }
 
     fn gather_finish(&self, targets: &[TargetNow], pos: Vec3, ri: f32, sum: f32) -> (f32, f32) {

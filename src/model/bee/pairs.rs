@@ -214,24 +214,24 @@ unsafe fn records16(
     Some((valid, floats))
 }
 
-/// Eq. 10's density sum over `list` for the bee whose record is `me` and body radius
-/// `ri`, starting from `own` (its own term), as the gather pass adds it one neighbour at a
-/// time (`BeeModel::gather_term`); `None` where the CPU lacks AVX-512 or the list is short.
+/// Eq. 10's density sum over `list` for the bee whose record is `me`, starting from `own`
+/// (its own term), as the gather pass adds it one neighbour at a time
+/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the CPU
+/// lacks AVX-512 or the list is short.
 #[inline]
 pub(super) fn density_sum(
-    kernels: &Kernels,
+    k: &Kernels,
     agents: &[Neighbour],
     list: &[u32],
     me: &Neighbour,
-    ri: f32,
     own: f32,
 ) -> Option<f32> {
     #[cfg(target_arch = "x86_64")]
     if list.len() >= WIDE_FROM && std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the CPU has AVX-512 F (checked above).
-        return unsafe { density16(kernels, agents, list, me, ri, own) };
+        return unsafe { density16(k, agents, list, me, own) };
     }
-    let _ = (kernels, agents, list, me, ri, own);
+    let _ = (k, agents, list, me, own);
     None
 }
 
@@ -242,9 +242,9 @@ unsafe fn density16(
     agents: &[Neighbour],
     list: &[u32],
     me: &Neighbour,
-    ri: f32,
     own: f32,
 ) -> Option<f32> {
+    let ri = me.radius;
     use std::arch::x86_64::*;
     let (pos, radius, mass) = (
         std::mem::offset_of!(Neighbour, pos),
@@ -421,7 +421,7 @@ mod tests {
                 let d = me.pos.distance_squared(o.pos).sqrt();
                 want += repulsion::density_term(&kernels, o.mass, d, me.radius + o.radius);
             }
-            match density_sum(&kernels, &agents, &list, me, me.radius, own) {
+            match density_sum(&kernels, &agents, &list, me, own) {
                 Some(got) => {
                     assert_eq!(got.to_bits(), want.to_bits(), "case {case}");
                     wide += 1;
