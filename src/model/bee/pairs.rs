@@ -31,9 +31,9 @@ pub(super) struct Bee<'a> {
 }
 
 /// The sums over `list` (indices into `agents`) of the pressure terms and the contact
-/// springs, as the step's loop adds them; `None` where the CPU lacks AVX-512, or where a
-/// neighbour within reach coincides with the bee (the loop's fallback direction then
-/// separates them).
+/// springs, as the step's loop adds them; `None` where the CPU lacks AVX-512, the list is
+/// shorter than `WIDE_FROM`, or a neighbour within reach coincides with the bee (the
+/// loop's fallback direction then separates them).
 #[inline]
 pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     #[cfg(target_arch = "x86_64")]
