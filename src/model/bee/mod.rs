@@ -314,20 +314,19 @@ impl Model for BeeModel {
 
         // Neighbours: pressure repulsion (Eq. 11) and contact springs (Sec. VII), a whole
         // list at once where the CPU allows (`pairs`), else one neighbour at a time.
-        let reach = self.h + ri + cx.max_body_radius;
-        let wide = pairs::Bee {
+        let bee = pairs::Bee {
             kernels: &self.kernels,
             pos: c.pos,
             vel: c.vel,
             radius: ri,
             density,
             pressure,
-            reach2: reach * reach,
+            reach: self.h + ri + cx.max_body_radius,
             spring: self.flight.spring,
         };
-        let (mut a_rep, a_col) = match pairs::sums(cx.agents, cx.lists[i].indices(), &wide) {
+        let (mut a_rep, a_col) = match pairs::sums(cx.agents, cx.lists[i].indices(), &bee) {
             Some(sums) => sums,
-            None => self.pairs_one_by_one(cx, i, c, ri, reach),
+            None => pairs_one_by_one(cx, i, &bee),
         };
 
         // Targets: attraction, and the push of their virtual particles.
@@ -537,36 +536,6 @@ impl Model for BeeModel {
 }
 
 impl BeeModel {
-    /// The sums of Eq. 11's pressure terms and Sec. VII's contact springs over bee `i`'s
-    /// neighbours within `reach`, one neighbour at a time (as `pairs::sums` does them all
-    /// at once).
-    fn pairs_one_by_one(
-        &self,
-        cx: &Context,
-        i: usize,
-        c: &Cruiser,
-        ri: f32,
-        reach: f32,
-    ) -> (Vec3, Vec3) {
-        let (density, pressure) = (cx.agents[i].density, cx.agents[i].pressure);
-        let mut a_rep = Vec3::ZERO;
-        let mut a_col = Vec3::ZERO;
-        // Locals, so that the neighbour loop reads registers rather than chasing `self`.
-        let (pos, vel, agents, kernels) = (c.pos, c.vel, cx.agents, &self.kernels);
-        cx.for_each_neighbour(i, reach, |j, pj, d2| {
-            let o = &agents[j];
-            let (r, dist) = (pos - pj, d2.sqrt());
-            let contact = ri + o.radius;
-            let fallback = || cx.separation_fallback(i, j);
-            let rho_j = if o.density > 0.0 { o.density } else { density };
-            a_rep += repulsion::pressure_term(
-                kernels, r, dist, contact, o.mass, pressure, o.pressure, density, rho_j, fallback,
-            );
-            a_col += self.flight.contact(fallback, contact, r, dist, vel - o.vel);
-        });
-        (a_rep, a_col)
-    }
-
     /// After a flying substep: lands the bee on a target with `land = true` whose surface
     /// its body touches (once it may land again), and records hovering.
     fn touch_down(&self, cx: &Context, i: usize, out: &mut Bee, ri: f32) {
@@ -634,6 +603,20 @@ impl BeeModel {
         };
         out
     }
+}
+
+/// The sums of Eq. 11's pressure terms and Sec. VII's contact springs over bee `i`'s
+/// neighbours within reach, one neighbour at a time (`pairs::sums` does a whole list at
+/// once).
+fn pairs_one_by_one(cx: &Context, i: usize, bee: &pairs::Bee) -> (Vec3, Vec3) {
+    let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
+    cx.for_each_neighbour(i, bee.reach, |j, pj, d2| {
+        let (push, spring) =
+            pairs::one(bee, &cx.agents[j], pj, d2, || cx.separation_fallback(i, j));
+        a_rep += push;
+        a_col += spring;
+    });
+    (a_rep, a_col)
 }
 
 /// Elevation of `v` above the horizontal, degrees.

@@ -24,8 +24,8 @@ pub(super) struct Bee<'a> {
     pub radius: f32,
     pub density: f32,
     pub pressure: f32,
-    /// Neighbours farther than this are left out, m (squared).
-    pub reach2: f32,
+    /// Neighbours at this distance or farther are left out, m.
+    pub reach: f32,
     /// Contact spring stiffness, 1/s².
     pub spring: f32,
 }
@@ -43,6 +43,42 @@ pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec
     }
     let _ = (agents, list, bee);
     None
+}
+
+/// One neighbour's terms, (Eq. 11's pressure push, Sec. VII's contact spring), for a
+/// neighbour `o` at `pj` whose squared distance from the bee is `d2` (within reach):
+/// what the lanes of `sums` each work out, and what the step adds one neighbour at a time
+/// where they do not. `fallback` separates coincident bodies.
+#[inline(always)]
+pub(super) fn one(
+    bee: &Bee,
+    o: &Neighbour,
+    pj: Vec3,
+    d2: f32,
+    fallback: impl Fn() -> Vec3 + Copy,
+) -> (Vec3, Vec3) {
+    let (r, dist) = (bee.pos - pj, d2.sqrt());
+    let contact = bee.radius + o.radius;
+    let rho_j = if o.density > 0.0 {
+        o.density
+    } else {
+        bee.density
+    };
+    let push = super::repulsion::pressure_term(
+        bee.kernels,
+        r,
+        dist,
+        contact,
+        o.mass,
+        bee.pressure,
+        o.pressure,
+        bee.density,
+        rho_j,
+        fallback,
+    );
+    let rel = bee.vel - o.vel;
+    let spring = crate::model::collision::spring_accel(r, dist, contact, rel, bee.spring, fallback);
+    (push, spring)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -78,7 +114,7 @@ unsafe fn sums16(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3,
         sub(splat(bee.pos.z), pz),
     );
     let d2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
-    let within = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(valid, d2, splat(bee.reach2));
+    let within = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(valid, d2, splat(bee.reach * bee.reach));
     let dist = _mm512_sqrt_ps(d2);
     // Coincident bodies take the loop's fallback direction.
     if _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(within, dist, splat(1e-9)) != within {
@@ -296,38 +332,19 @@ mod tests {
     use super::*;
     use crate::math::random_cloud;
     use crate::model::bee::repulsion;
-    use crate::model::collision;
 
-    /// The step's loop, one neighbour at a time (`BeeModel::pairs_one_by_one`'s sums).
+    /// The step's loop, one neighbour at a time (`BeeModel::pairs_one_by_one`, whose
+    /// `for_each_neighbour` keeps those within reach).
     fn one_by_one(agents: &[Neighbour], list: &[u32], bee: &Bee) -> (Vec3, Vec3) {
         let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
         for &j in list {
             let o = &agents[j as usize];
             let d2 = bee.pos.distance_squared(o.pos);
-            if d2 >= bee.reach2 {
-                continue;
+            if d2 < bee.reach * bee.reach {
+                let (push, spring) = one(bee, o, o.pos, d2, || Vec3::Y);
+                a_rep += push;
+                a_col += spring;
             }
-            let (r, dist) = (bee.pos - o.pos, d2.sqrt());
-            let contact = bee.radius + o.radius;
-            let rho_j = if o.density > 0.0 {
-                o.density
-            } else {
-                bee.density
-            };
-            a_rep += repulsion::pressure_term(
-                bee.kernels,
-                r,
-                dist,
-                contact,
-                o.mass,
-                bee.pressure,
-                o.pressure,
-                bee.density,
-                rho_j,
-                || Vec3::Y,
-            );
-            let rel = bee.vel - o.vel;
-            a_col += collision::spring_accel(r, dist, contact, rel, bee.spring, || Vec3::Y);
         }
         (a_rep, a_col)
     }
@@ -371,7 +388,7 @@ mod tests {
                 radius: me.radius,
                 density: [0.0, me.density, 10.0][case % 3],
                 pressure: [0.0, me.pressure][case % 2],
-                reach2: [0.16f32, 0.05, 0.02][case % 3].powi(2),
+                reach: [0.16, 0.05, 0.02][case % 3],
                 spring: [4000.0, 0.0][(case / 7) % 2],
             };
             let want = one_by_one(&agents, &list, &bee);
