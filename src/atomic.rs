@@ -21,8 +21,9 @@ pub fn interrupted() -> bool {
 use crate::error::{Error, Result};
 use sha2::{Digest, Sha256};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, mpsc};
 
 /// A file's size in bytes and its SHA-256 (lower-case hex, as `sha256sum` prints it), as
 /// the cache set's manifest records them.
@@ -84,8 +85,252 @@ pub fn hex(b: &[u8]) -> String {
     s
 }
 
-/// An [`AtomicFile`]'s writer: buffered, hashing what it writes.
-pub type Output = BufWriter<Hashing<File>>;
+/// Bytes an [`Output`] gathers before passing them on.
+const CHUNK: usize = 1 << 20;
+/// The most chunks an [`Output`] has at once (its own, and those its threads have yet to
+/// hash and write): bounds its memory, and holds the caller back while they are behind.
+const CHUNKS: usize = 4;
+/// Bytes written between two requests that the kernel start writing them to the disk.
+const WRITEBACK: u64 = 8 << 20;
+
+/// An [`AtomicFile`]'s writer: buffered, hashing what it writes. From its second chunk on,
+/// one thread hashes the full chunks and another writes them, in order, while the caller
+/// makes the next: the SHA-256 and the write calls of a large cache then overlap the work
+/// that produces its bytes and each other (most of a bake's tail after its last frame,
+/// issue 14). The writing thread also asks the kernel to start putting each few MiB on
+/// the disk at once, so that the `fsync` sealing the file has little left to wait for. A
+/// file of one chunk is written on the caller's thread at the end, with no thread started.
+pub struct Output {
+    buf: Vec<u8>,
+    sink: Sink,
+}
+
+type Hashed = (Sha256, u64);
+
+enum Sink {
+    /// No chunk passed on yet.
+    Here(Hashing<File>),
+    There {
+        /// To the writing thread, then to the hashing one.
+        full: [mpsc::Sender<Arc<Vec<u8>>>; 2],
+        /// Chunks both threads are done with, to fill again.
+        empty: mpsc::Receiver<Vec<u8>>,
+        /// Chunks not yet allocated.
+        unmade: usize,
+        writing: std::thread::JoinHandle<std::io::Result<File>>,
+        hashing: std::thread::JoinHandle<Hashed>,
+    },
+    /// Finished, or failed (the error was returned).
+    Gone,
+}
+
+/// Gives `chunk` back to the caller if the other thread is done with it too (exactly one
+/// of the two gets it: `Arc::into_inner`).
+fn recycle(chunk: Arc<Vec<u8>>, done: &mpsc::Sender<Vec<u8>>) {
+    if let Some(mut chunk) = Arc::into_inner(chunk) {
+        chunk.clear();
+        let _ = done.send(chunk);
+    }
+}
+
+impl Output {
+    fn new(file: File) -> Self {
+        Output {
+            buf: Vec::with_capacity(CHUNK),
+            sink: Sink::Here(Hashing::new(file)),
+        }
+    }
+
+    /// Starts the threads, which take over the file and the hash so far.
+    fn start(hashing: Hashing<File>) -> std::io::Result<Sink> {
+        let Hashing {
+            inner: mut file,
+            mut sha,
+            mut bytes,
+        } = hashing;
+        let (to_writing, chunks) = mpsc::channel::<Arc<Vec<u8>>>();
+        let (to_hashing, hashed) = mpsc::channel::<Arc<Vec<u8>>>();
+        let (done, empty) = mpsc::channel();
+        let done2 = done.clone();
+        let start = bytes;
+        let writing = std::thread::Builder::new()
+            .name("beeswarm-write".into())
+            .spawn(move || {
+                let (mut at, mut asked) = (start, start);
+                for chunk in chunks {
+                    file.write_all(&chunk)?;
+                    at += chunk.len() as u64;
+                    recycle(chunk, &done);
+                    if at - asked >= WRITEBACK {
+                        start_writeback(&file, asked, at - asked);
+                        asked = at;
+                    }
+                }
+                Ok(file)
+            })?;
+        let hashing = std::thread::Builder::new()
+            .name("beeswarm-hash".into())
+            .spawn(move || {
+                for chunk in hashed {
+                    sha.update(&chunk[..]);
+                    bytes += chunk.len() as u64;
+                    recycle(chunk, &done2);
+                }
+                (sha, bytes)
+            })?;
+        Ok(Sink::There {
+            full: [to_writing, to_hashing],
+            empty,
+            unmade: CHUNKS - 1,
+            writing,
+            hashing,
+        })
+    }
+
+    /// Passes the full chunk to the threads (started at the first) and takes an empty
+    /// one; the writing thread's error, if it failed.
+    fn pass_on(&mut self) -> std::io::Result<()> {
+        if let Sink::Here(_) = self.sink {
+            let Sink::Here(hashing) = std::mem::replace(&mut self.sink, Sink::Gone) else {
+                unreachable!()
+            };
+            self.sink = Output::start(hashing)?;
+        }
+        let Sink::There {
+            full,
+            empty,
+            unmade,
+            ..
+        } = &mut self.sink
+        else {
+            return Err(gone());
+        };
+        let chunk = Arc::new(std::mem::take(&mut self.buf));
+        // A send or a receive fails only once the writing thread has stopped on an error
+        // (the hashing one cannot fail).
+        let sent = full[0].send(chunk.clone()).is_ok() && full[1].send(chunk).is_ok();
+        let next = if !sent {
+            None
+        } else if let Ok(chunk) = empty.try_recv() {
+            Some(chunk)
+        } else if *unmade > 0 {
+            *unmade -= 1;
+            Some(Vec::with_capacity(CHUNK))
+        } else {
+            empty.recv().ok()
+        };
+        match next {
+            Some(chunk) => {
+                self.buf = chunk;
+                Ok(())
+            }
+            None => Err(self.join().err().unwrap_or_else(gone)),
+        }
+    }
+
+    /// Stops the threads once they have written and hashed every chunk passed on.
+    fn join(&mut self) -> std::io::Result<Hashing<File>> {
+        match std::mem::replace(&mut self.sink, Sink::Gone) {
+            Sink::Here(hashing) => Ok(hashing),
+            Sink::There {
+                full,
+                empty,
+                writing,
+                hashing,
+                ..
+            } => {
+                drop(full);
+                drop(empty);
+                let failed = || std::io::Error::other("the file's writer failed");
+                let file = writing.join().unwrap_or_else(|_| Err(failed()));
+                let (sha, bytes) = hashing.join().map_err(|_| failed())?;
+                Ok(Hashing {
+                    inner: file?,
+                    sha,
+                    bytes,
+                })
+            }
+            Sink::Gone => Err(gone()),
+        }
+    }
+
+    /// Writes what is left; the file and what was written to it.
+    fn finish(mut self) -> std::io::Result<(File, Written)> {
+        if !self.buf.is_empty() {
+            self.pass_on_last()?;
+        }
+        Ok(self.join()?.finish())
+    }
+
+    /// The last, partial chunk: to the threads if they run, else written here.
+    fn pass_on_last(&mut self) -> std::io::Result<()> {
+        match &mut self.sink {
+            Sink::Here(hashing) => {
+                let r = hashing.write_all(&self.buf);
+                self.buf.clear();
+                r
+            }
+            _ => self.pass_on(),
+        }
+    }
+}
+
+/// Asks the kernel to start writing `len` bytes of `file` from `offset` to the disk, and
+/// returns at once (Linux; elsewhere the `fsync` at the end does it all).
+fn start_writeback(file: &File, offset: u64, len: u64) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: a plain system call on an open descriptor; its failure (a filesystem
+        // that does not support it) only leaves the work to `fsync`.
+        unsafe {
+            libc::sync_file_range(
+                file.as_raw_fd(),
+                offset as libc::off64_t,
+                len as libc::off64_t,
+                libc::SYNC_FILE_RANGE_WRITE,
+            );
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (file, offset, len);
+}
+
+fn gone() -> std::io::Error {
+    std::io::Error::other("write after the file was finished")
+}
+
+impl Write for Output {
+    fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
+        if self.buf.len() == CHUNK {
+            self.pass_on()?;
+        }
+        let n = data.len().min(CHUNK - self.buf.len());
+        self.buf.extend_from_slice(&data[..n]);
+        Ok(n)
+    }
+
+    /// Writes everything so far to the file (waiting for the sink, if one runs).
+    fn flush(&mut self) -> std::io::Result<()> {
+        if !self.buf.is_empty() {
+            self.pass_on_last()?;
+        }
+        if let Sink::There { .. } = self.sink {
+            // Everything passed on is written once the sink has stopped; it starts again
+            // at the next full chunk.
+            let hashing = self.join()?;
+            self.sink = Sink::Here(hashing);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Output {
+    fn drop(&mut self) {
+        // Not left running behind a file being removed.
+        let _ = self.join();
+    }
+}
 
 pub struct AtomicFile {
     tmp: PathBuf,
@@ -113,7 +358,7 @@ impl AtomicFile {
         Ok(AtomicFile {
             tmp,
             dest: dest.to_path_buf(),
-            writer: Some(BufWriter::with_capacity(1 << 20, Hashing::new(file))),
+            writer: Some(Output::new(file)),
         })
     }
 
@@ -130,10 +375,9 @@ impl AtomicFile {
     pub fn seal(mut self) -> Result<SealedFile> {
         let w = self.writer.take().expect("writer present until sealed");
         let result = w
-            .into_inner()
-            .map_err(|e| Error::io(&self.tmp, e.into_error()))
-            .and_then(|hashing| {
-                let (file, written) = hashing.finish();
+            .finish()
+            .map_err(|e| Error::io(&self.tmp, e))
+            .and_then(|(file, written)| {
                 file.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
                 Ok(written)
             });
@@ -416,6 +660,54 @@ mod tests {
         let want = hex(&Sha256::digest(&on_disk));
         assert_eq!(sealed.written().unwrap().sha256, want);
         assert_eq!(sealed.written().unwrap().bytes, data.len() as u64);
+    }
+
+    /// Bytes that tell their place: a shifted or repeated chunk shows.
+    fn numbered(n: usize) -> Vec<u8> {
+        (0..n as u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect()
+    }
+
+    #[test]
+    fn many_chunks_and_a_flush_between_are_written_and_hashed_in_order() {
+        // More chunks than are ever in flight, so every chunk is filled again after its
+        // threads are done with it; a flush stops them and the next chunk restarts them.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("many.bin");
+        let data = numbered(CHUNKS * CHUNK * 3 + 12_345);
+        let mut f = AtomicFile::create(&path).unwrap();
+        let (before, after) = data.split_at(CHUNK * 5 + 7);
+        for piece in before.chunks(100_003) {
+            f.write_all(piece).unwrap();
+        }
+        f.flush().unwrap();
+        for piece in after.chunks(1 << 21) {
+            f.write_all(piece).unwrap();
+        }
+        let sealed = f.seal().unwrap();
+        assert!(std::fs::read(sealed.temp_path()).unwrap() == data);
+        let want = hex(&Sha256::digest(&data));
+        assert_eq!(sealed.written().unwrap().sha256, want);
+        assert_eq!(sealed.written().unwrap().bytes, data.len() as u64);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_failing_disk_is_an_error_not_a_hang() {
+        // /dev/full refuses every write (ENOSPC), as a full disk would: the writing
+        // thread stops, and the caller hears of it on a later write or at the end.
+        let Ok(full) = File::options().write(true).open("/dev/full") else {
+            eprintln!("skipped: no /dev/full on this machine");
+            return;
+        };
+        let mut out = Output::new(full);
+        let data = numbered(CHUNK);
+        let failed = (0..4 * CHUNKS).any(|_| out.write_all(&data).is_err());
+        assert!(
+            failed || out.finish().is_err(),
+            "the writes to /dev/full went unreported"
+        );
     }
 
     #[test]
