@@ -93,7 +93,7 @@ const CHUNKS: usize = 4;
 /// Bytes written between two requests that the kernel start writing them to the disk.
 const WRITEBACK: u64 = 8 << 20;
 
-/// An [`AtomicFile`]'s writer: buffered, hashing what it writes. From its second chunk on,
+/// An [`AtomicFile`]'s writer: buffered, hashing what it writes. Once it outgrows a chunk,
 /// one thread hashes the full chunks and another writes them, in order, while the caller
 /// makes the next: the SHA-256 and the write calls of a large cache then overlap the work
 /// that produces its bytes and each other (most of a bake's tail after its last frame,
@@ -187,9 +187,10 @@ impl Output {
         })
     }
 
-    /// Passes the full chunk to the threads (started at the first) and takes an empty
-    /// one; the writing thread's error, if it failed.
-    fn pass_on(&mut self) -> std::io::Result<()> {
+    /// Passes the chunk to the threads (started at the first) and, unless it is the
+    /// `last` before a flush or the end, takes an empty one; the writing thread's error,
+    /// if it failed.
+    fn pass_on(&mut self, last: bool) -> std::io::Result<()> {
         if let Sink::Here(_) = self.sink {
             let Sink::Here(hashing) = std::mem::replace(&mut self.sink, Sink::Gone) else {
                 unreachable!()
@@ -211,6 +212,8 @@ impl Output {
         let sent = full[0].send(chunk.clone()).is_ok() && full[1].send(chunk).is_ok();
         let next = if !sent {
             None
+        } else if last {
+            Some(Vec::new())
         } else if let Ok(chunk) = empty.try_recv() {
             Some(chunk)
         } else if *unmade > 0 {
@@ -270,7 +273,7 @@ impl Output {
                 self.buf.clear();
                 r
             }
-            _ => self.pass_on(),
+            _ => self.pass_on(true),
         }
     }
 }
@@ -303,7 +306,7 @@ fn gone() -> std::io::Error {
 impl Write for Output {
     fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
         if self.buf.len() == CHUNK {
-            self.pass_on()?;
+            self.pass_on(false)?;
         }
         let n = data.len().min(CHUNK - self.buf.len());
         self.buf.extend_from_slice(&data[..n]);
