@@ -234,7 +234,7 @@ impl Grid {
         self.items.resize(n + LANES - 1, u32::MAX);
         self.slot.clear();
         self.slot.resize(positions.len(), u32::MAX);
-        let pieces = if cells.len() >= PARALLEL_SORT {
+        let pieces = if sorts_in_pieces(cells.len(), total) {
             rayon::current_num_threads().clamp(1, MAX_SORT_PIECES)
         } else {
             1
@@ -291,12 +291,14 @@ impl Grid {
         // Piece p's places in the visiting order.
         let range = |p: usize| p * piece..((p + 1) * piece).min(len);
         let run = total.div_ceil(pieces);
-        self.cursors.clear();
+        // Zeroed by each piece on its own thread (a serial fill of every piece's counts
+        // over every cell cost as much as the sort in a sparse grid).
         self.cursors.resize(pieces * total, 0);
-        self.cursors
+        self.cursors[..pieces * total]
             .par_chunks_mut(total)
             .enumerate()
             .for_each(|(p, counts)| {
+                counts.fill(0);
                 for_each_placed(range(p), cells, except, visit, |_, c| counts[c] += 1);
             });
         // Each run of cells: its agents, then where it begins; then each cell's start and
@@ -338,7 +340,7 @@ impl Grid {
         });
         self.starts[total] = at;
         let (items, slot) = (Scatter::new(&mut self.items), Scatter::new(&mut self.slot));
-        self.cursors
+        self.cursors[..pieces * total]
             .par_chunks_mut(total)
             .enumerate()
             .for_each(|(p, cursor)| {
@@ -939,8 +941,21 @@ impl Runs {
 }
 
 /// Agents from which the counting sort places them in pieces on several threads: below,
-/// the serial sort is quicker than the pieces' scan over every cell.
-const PARALLEL_SORT: usize = 8_192;
+/// the serial sort is quicker than the pieces' scans over every cell and their four
+/// forks and joins.
+const PARALLEL_SORT: usize = 32_768;
+/// The most cells per agent for which the sort goes in pieces. Pieces halve the agents'
+/// share of the sort (scattered writes, a few ns each) but add passes over every cell
+/// (a fraction of a ns each): where cells far outnumber agents (a swarm spread thin, as
+/// the default shot's bees are after a few seconds) the serial sort is quicker, and frees
+/// the other thread.
+const SORT_CELLS_PER_AGENT: usize = 2;
+
+/// Whether a counting sort of `agents` over `cells` cells goes in pieces (see
+/// [`PARALLEL_SORT`] and [`SORT_CELLS_PER_AGENT`]).
+fn sorts_in_pieces(agents: usize, cells: usize) -> bool {
+    agents >= PARALLEL_SORT && cells <= SORT_CELLS_PER_AGENT * agents
+}
 /// At most this many pieces (each has its own counts over every cell).
 const MAX_SORT_PIECES: usize = 8;
 
@@ -1499,11 +1514,15 @@ mod tests {
 
     #[test]
     fn sorting_in_pieces_on_several_threads_gives_the_serial_sort() {
-        // From PARALLEL_SORT agents the counting sort places them in one piece per
-        // thread; every cell must still list its agents in visiting order, and the
-        // starts, the places and the answers must be those of one thread. A sparse cloud
-        // and a crowd (thin cells), visited by a shuffle of the ids, a tenth left out.
-        for (seed, n, size) in [(21, 20_000, 2.0), (22, 3 * PARALLEL_SORT, 0.05)] {
+        // From PARALLEL_SORT agents (and at most SORT_CELLS_PER_AGENT cells each) the
+        // counting sort places them in one piece per thread; every cell must still list
+        // its agents in visiting order, and the starts, the places and the answers must be
+        // those of one thread. A sparse cloud and a crowd (thin cells), visited by a
+        // shuffle of the ids, a tenth left out.
+        for (seed, n, size) in [
+            (21, PARALLEL_SORT + 2_000, 2.0),
+            (22, 3 * PARALLEL_SORT, 0.05),
+        ] {
             let pts = cloud(seed, n, size);
             let mut visit: Vec<u32> = (0..n as u32).collect();
             let mut rng = crate::math::Rng::new(seed, 1, 1);
@@ -1524,6 +1543,7 @@ mod tests {
             };
             let one = build(1);
             assert_eq!(one.split > 1, size < 1.0, "the crowd has thin cells");
+            assert!(sorts_in_pieces(n, one.starts.len() - 1), "sorted in pieces");
             for threads in [2, 3, 8] {
                 let g = build(threads);
                 assert_eq!(
