@@ -249,8 +249,13 @@ impl Grid {
             for_each_placed(0..cells.len(), &cells, except, &[], |_, c| {
                 self.starts[c] += 1
             });
-            for i in 1..total {
-                self.starts[i] += self.starts[i - 1];
+            // The running sum in a register: `starts[i] += starts[i - 1]` waits on each
+            // store coming back from memory (most of a sparse grid's sort, whose cells far
+            // outnumber its agents).
+            let mut sum = 0;
+            for s in &mut self.starts[..total] {
+                sum += *s;
+                *s = sum;
             }
             self.starts[total] = n as u32;
             let (starts, items, slot) = (&mut self.starts, &mut self.items, &mut self.slot);
