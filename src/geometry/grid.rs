@@ -85,10 +85,15 @@ impl Grid {
     /// the last build land in the border cells, which keeps queries valid).
     #[inline]
     fn cell_of(&self, p: Vec3) -> IVec3 {
-        // Clamped in floats first: `as` saturates, and NaN-free positions are guaranteed.
-        let c = ((p - self.origin) * self.inv_cell).max(Vec3::ZERO);
-        let max = self.dims - IVec3::ONE;
-        IVec3::new(floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)).clamp(IVec3::ZERO, max)
+        // Clamped into [0, dims − 1] in floats, then truncated: at or above 0 truncation
+        // is the floor, and the bounds are whole numbers (exact in f32), so this is the
+        // floor clamped into the grid, without a branch per axis. NaN-free positions are
+        // guaranteed.
+        let max = (self.dims - IVec3::ONE).as_vec3();
+        ((p - self.origin) * self.inv_cell)
+            .max(Vec3::ZERO)
+            .min(max)
+            .as_ivec3()
     }
 
     #[inline]
@@ -888,14 +893,6 @@ fn beyond(gap: f32, radius: f32, r2: f32) -> bool {
 fn rough_cbrt(x: f32) -> f32 {
     let y = f32::from_bits(x.to_bits() / 3 + 0x2A51_67AF);
     (2.0 * y + x / (y * y)) * (1.0 / 3.0)
-}
-
-/// `floor` as an integer without a libm call (x86-64 without SSE4.1 has no floor
-/// instruction); saturates far outside the grid, where callers clamp anyway.
-#[inline(always)]
-fn floor_i32(v: f32) -> i32 {
-    let t = v as i32;
-    if (t as f32) > v { t - 1 } else { t }
 }
 
 /// Calls `f(i, cell)` for the agents visited at `places` of `visit` (empty: agent j is the
