@@ -6,7 +6,10 @@
 //! An agent interacts with at most `k` neighbours: the nearest within the interaction
 //! radius (docs/model.md, "Bounded neighbours"). The cell edge follows the swarm's density
 //! — about two agents per cell where a typical agent is, never more than the radius. In a
-//! sparse cloud a query scans the 9 rows of 3 cells around it. In a crowd the cells are
+//! sparse cloud a query scans the 9 rows of 3 cells around it; in a very sparse one (a
+//! swarm spread thin) the cells may be twice the radius, and a query scans at most 2 × 2
+//! rows of 2, listing what it finds in the order the finer walk would (`FineCells`, so the
+//! same answers in the same order either way). In a crowd the cells are
 //! smaller and 4 times thinner along x, and a query walks rows of cells along x in rings of
 //! growing distance in y and z, each row trimmed to the chord the search sphere cuts
 //! through it, out to a guess of the k-th neighbour's distance from the local density
@@ -75,7 +78,37 @@ pub struct Grid {
     /// The parallel counting sort's per-piece counts, then cursors: piece p's for cell c
     /// at `p * cells + c`.
     cursors: Vec<u32>,
+    /// Coarse cells (twice the fine edge, see [`COARSE_CROWD`]) are allowed, and this
+    /// build has them.
+    coarse_allowed: bool,
+    coarse: bool,
+    /// The next build tries coarse cells first (the last one found the swarm sparse).
+    try_coarse: bool,
+    /// Tests: coarse cells whatever the occupancy.
+    force_coarse: bool,
+    /// The fine layout a coarse build stands in for: its cells order a query's answer.
+    fine: FineCells,
 }
+
+/// The layout of cells as large as the radius (the sparse layout) that a coarse build
+/// stands in for: a query on coarse cells lists its neighbours in the order a walk over
+/// these cells lists them (by cell index, then in visiting order within a cell), so
+/// both builds give the same answers in the same order.
+#[derive(Clone, Copy, Debug, Default)]
+struct FineCells {
+    cell: f32,
+    inv_cell: f32,
+    dims: IVec3,
+}
+
+/// A build tries cells of twice the radius (a query then walks the 2 × 2 rows of 2 cells
+/// its sphere can reach, instead of 3 × 3 rows of 3) where the last build's cells of the
+/// radius held at most this agent-weighted occupancy (about 0.3 agents a cell on average:
+/// a swarm spread thin, as the default shot's bees after a few seconds)...
+const FINE_CROWD_FOR_COARSE: f64 = 1.3;
+/// ...and keeps them while their own occupancy stays at most this (about 3 agents a
+/// coarse cell: a query then scans about 24 candidates in its 4 rows).
+const COARSE_CROWD: f64 = 4.0;
 
 /// The largest `k` a query takes.
 pub const MAX_K: usize = 32;
@@ -120,7 +153,11 @@ impl Grid {
 
     /// The cell edge, m.
     pub fn cell(&self) -> f32 {
-        self.cell
+        if self.coarse {
+            self.fine.cell
+        } else {
+            self.cell
+        }
     }
 
     /// Rebuilds the grid over `positions` for queries within `radius` metres: cells of at
@@ -164,12 +201,47 @@ impl Grid {
             (lo, hi)
         };
         let radius = radius.max(1e-6);
-        self.layout(lo, hi, self.capped(lo, hi, radius, n, 1), 1);
+        let fine = self.capped(lo, hi, radius, n, 1);
+        self.coarse = false;
+        if self.coarse_allowed && (self.try_coarse || self.force_coarse) {
+            // A sparse swarm last time: cells of twice the edge, kept if still sparse.
+            self.layout(lo, hi, 2.0 * fine, 1);
+            self.sort(positions, except, visit);
+            if self.crowd(n) <= COARSE_CROWD || self.force_coarse {
+                self.coarse = true;
+                let dims = ((hi - lo).max(Vec3::splat(1e-6)) * (1.0 / fine))
+                    .floor()
+                    .as_ivec3()
+                    + IVec3::ONE;
+                self.fine = FineCells {
+                    cell: fine,
+                    inv_cell: 1.0 / fine,
+                    dims: dims.max(IVec3::ONE),
+                };
+                return;
+            }
+            self.try_coarse = false;
+        }
+        self.layout(lo, hi, fine, 1);
         self.sort(positions, except, visit);
-        // How crowded a typical agent's cell is: the agent-weighted mean occupancy,
-        // Σ count² over the cells, an exact integer either way it is summed: over the
-        // cells, or over the agents where there are fewer of them (a small swarm spread
-        // wide has many more cells than agents).
+        let crowd = self.crowd(n);
+        self.try_coarse = crowd <= FINE_CROWD_FOR_COARSE;
+        if crowd > (TARGET_OCCUPANCY as f64) * 2.0 {
+            // Crowded: the edge that holds about TARGET_OCCUPANCY agents at that density.
+            let cell = self.cell * (TARGET_OCCUPANCY / crowd as f32).cbrt();
+            let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n, X_SPLIT);
+            if cell < self.cell * 0.9 {
+                self.layout(lo, hi, cell, X_SPLIT);
+                self.sort(positions, except, visit);
+            }
+        }
+    }
+
+    /// How crowded a typical agent's cell is: the agent-weighted mean occupancy,
+    /// Σ count² over the cells (an exact integer either way it is summed: over the cells,
+    /// or over the agents where there are fewer of them: a small swarm spread wide has
+    /// many more cells than agents), over `n`.
+    fn crowd(&self, n: usize) -> f64 {
         let occupancy = |c: usize| (self.starts[c + 1] - self.starts[c]) as u64;
         let squares: u64 = if self.starts.len() - 1 <= self.len() {
             (0..self.starts.len() - 1)
@@ -181,16 +253,15 @@ impl Grid {
                 .map(|&i| occupancy(self.cells[i as usize] as usize))
                 .sum()
         };
-        let crowd = squares as f64 / n.max(1) as f64;
-        if crowd > (TARGET_OCCUPANCY as f64) * 2.0 {
-            // Crowded: the edge that holds about TARGET_OCCUPANCY agents at that density.
-            let cell = self.cell * (TARGET_OCCUPANCY / crowd as f32).cbrt();
-            let cell = self.capped(lo, hi, cell.max(radius * MIN_CELL_FRACTION), n, X_SPLIT);
-            if cell < self.cell * 0.9 {
-                self.layout(lo, hi, cell, X_SPLIT);
-                self.sort(positions, except, visit);
-            }
-        }
+        squares as f64 / n.max(1) as f64
+    }
+
+    /// Lets builds use coarse cells where the swarm is sparse (see [`COARSE_CROWD`]):
+    /// the same answers from [`Grid::nearest`], in the same order, for fewer
+    /// instructions. Off by default, as for callers of [`Grid::within`], whose answers
+    /// come in the walk's order.
+    pub fn allow_coarse(&mut self, allow: bool) {
+        self.coarse_allowed = allow;
     }
 
     /// `cell`, grown if the box would need more than the cell budget.
@@ -423,9 +494,15 @@ impl Grid {
             skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
             k,
             wide,
+            fine: self.coarse.then_some((self.origin, self.fine)),
         };
         let mut found = Found::default();
-        if self.cell >= radius {
+        if self.coarse {
+            self.walk_coarse(p, radius, &scan, &mut found);
+            if found.len <= k {
+                scan.in_fine_order(&mut found);
+            }
+        } else if self.cell >= radius {
             // Cells as large as the radius: the 27 around p hold every neighbour. One pass
             // over 9 rows of 3 cells, rows beyond the radius skipped.
             self.walk_cube(p, c, radius * radius, &scan, &mut found);
@@ -554,6 +631,43 @@ impl Grid {
         let r3 = 3.0 * k as f32 * cells / (4.0 * std::f32::consts::PI * count as f32);
         let margin3 = GUESS_MARGIN * GUESS_MARGIN * GUESS_MARGIN;
         margin3 * r3 * (self.cell * self.cell * self.cell)
+    }
+
+    /// Coarse cells (twice the radius at least): collects the rows of cells the box of
+    /// the sphere of `radius` around p reaches (at most 2 × 2 rows of 2 cells, the box
+    /// widened by a hair against rounding), rows beyond the radius skipped.
+    fn walk_coarse(&self, p: Vec3, radius: f32, scan: &Scan, found: &mut Found) {
+        debug_assert!(radius <= self.fine.cell, "a query within the grid's radius");
+        let r2 = radius * radius;
+        let reach = Vec3::splat(radius * (1.0 + 1e-5) + 1e-7);
+        let (lo, hi) = (self.cell_of(p - reach), self.cell_of(p + reach));
+        let (d, o) = (self.dims, self.origin);
+        // The y slabs' distances once, not once per z (at most 3 slabs: the box is at
+        // most a hair wider than one coarse cell).
+        let mut dy2 = [0.0; 3];
+        for (y, slab) in (lo.y..=hi.y).zip(&mut dy2) {
+            *slab = self.slab_d2(p.y, o.y, y);
+        }
+        let mut rows = [(0u32, 0u32, 0.0f32); 9];
+        let mut m = 0;
+        for z in lo.z..=hi.z {
+            let dz2 = self.slab_d2(p.z, o.z, z);
+            for (y, &dy2) in (lo.y..=hi.y).zip(&dy2) {
+                let row = (d.x * (y + d.y * z)) as usize;
+                let (s, e) = (
+                    self.starts[row + lo.x as usize],
+                    self.starts[row + hi.x as usize + 1],
+                );
+                if m == rows.len() {
+                    // (Only past the contract: a radius beyond the fine cell's.)
+                    scan.collect_rows(&rows, r2, found);
+                    m = 0;
+                }
+                rows[m] = (s, e, dz2 + dy2);
+                m += 1;
+            }
+        }
+        scan.collect_rows(&rows[..m], r2, found);
     }
 
     /// Cells as large as the radius: collects the 9 rows of 3 cells around p, rows beyond
@@ -1067,6 +1181,9 @@ struct Scan<'a> {
     k: usize,
     /// Runs are scanned, and candidates ranked, with AVX-512 (`wide_collect`).
     wide: bool,
+    /// On coarse cells: the grid's origin and the fine layout, whose walk order the
+    /// candidates are put in before any are kept (`Scan::in_fine_order`).
+    fine: Option<(Vec3, FineCells)>,
 }
 
 impl Scan<'_> {
@@ -1203,6 +1320,50 @@ impl Scan<'_> {
         }
     }
 
+    /// On coarse cells, puts the candidates in the order a walk over the fine cells
+    /// collects them: by fine cell index (rows along x, then y, then z), then by place in
+    /// the sorted arrays, which within a fine cell (inside one coarse cell) is the
+    /// visiting order. An insertion sort: a sparse query has a few.
+    #[inline]
+    fn in_fine_order(&self, found: &mut Found) {
+        let Some((origin, fine)) = self.fine else {
+            return;
+        };
+        let n = found.len;
+        if n < 2 {
+            return;
+        }
+        let max = (fine.dims - IVec3::ONE).as_vec3();
+        let key = |s: u32| -> u64 {
+            let i = s as usize;
+            let q = Vec3::new(self.xs[i], self.ys[i], self.zs[i]);
+            // As `Grid::cell_of` on the fine layout.
+            let c = ((q - origin) * fine.inv_cell)
+                .max(Vec3::ZERO)
+                .min(max)
+                .as_ivec3();
+            let index = (c.x + fine.dims.x * (c.y + fine.dims.y * c.z)) as u64;
+            (index << 32) | s as u64
+        };
+        let mut keys = [0u64; COLLECT + WIDE_LANES];
+        for (k, &s) in keys.iter_mut().zip(&found.slots[..n]) {
+            *k = key(s);
+        }
+        for i in 1..n {
+            let (kk, s, d) = (keys[i], found.slots[i], found.d2[i]);
+            let mut j = i;
+            while j > 0 && keys[j - 1] > kk {
+                keys[j] = keys[j - 1];
+                found.slots[j] = found.slots[j - 1];
+                found.d2[j] = found.d2[j - 1];
+                j -= 1;
+            }
+            keys[j] = kk;
+            found.slots[j] = s;
+            found.d2[j] = d;
+        }
+    }
+
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
     /// k-th distance going to the first. Their squared distances are the AVX-512 scan's,
     /// or worked out again as `collect` does (so the same bits). Up to `RANKED` candidates
@@ -1218,6 +1379,8 @@ impl Scan<'_> {
         if n <= k {
             return;
         }
+        // Ties at the k-th distance go to the first in the fine walk's order.
+        self.in_fine_order(found);
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
         // ∞: no candidate, nearer than none.
         let mut d2 = [f32::INFINITY; COLLECT + LANES];
@@ -1401,6 +1564,7 @@ mod tests {
                 skip_slot: u32::MAX,
                 k,
                 wide,
+                fine: None,
             };
             let mut found = Found::default();
             // Collected in a scrambled order, as a walk over cells would.
@@ -1651,6 +1815,7 @@ mod tests {
                         skip_slot: g.slot[i],
                         k: MAX_K,
                         wide,
+                        fine: None,
                     };
                     let c = g.cell_of(p);
                     let margin = g.row_margin(p, c);
@@ -1670,6 +1835,60 @@ mod tests {
             near > 20_000 && rings > 20_000,
             "{near} near, {rings} ring walks"
         );
+    }
+
+    #[test]
+    fn a_coarse_grid_answers_as_the_fine_grid_in_the_same_order() {
+        // Sparse clouds (random; a lattice, whose equal distances make ties at the k-th,
+        // broken by the fine walk's order; a few dense clumps in a sparse cloud, whose
+        // queries keep k of many), some points left out and visited in a shuffled
+        // order: every query's answer and its order as on the fine cells, on both scans.
+        let mut lattice = Vec::new();
+        for x in 0..24 {
+            for y in 0..24 {
+                for z in 0..24 {
+                    lattice.push(Vec3::new(x as f32, y as f32, z as f32) * 0.37);
+                }
+            }
+        }
+        let mut clumps = cloud(33, 3_000, 4.0);
+        for c in 0..4 {
+            let centre = Vec3::splat(c as f32 - 1.5);
+            clumps.extend(cloud(40 + c, 40, 0.05).into_iter().map(|p| p + centre));
+        }
+        for (pts, radius) in [(cloud(31, 4_000, 4.0), 0.3), (lattice, 0.4), (clumps, 0.3)] {
+            let n = pts.len();
+            let mut visit: Vec<u32> = (0..n as u32).collect();
+            let mut rng = crate::math::Rng::new(5, 1, 1);
+            for k in (1..n).rev() {
+                visit.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+            }
+            let except: Vec<bool> = (0..n).map(|i| i % 13 == 4).collect();
+            let mut fine = Grid::default();
+            fine.build_visiting(&pts, radius, &except, &visit);
+            let mut coarse = Grid::default();
+            coarse.allow_coarse(true);
+            // The first build measures the swarm, the second takes coarse cells (the
+            // random cloud is sparse enough; the others are made to).
+            coarse.build_visiting(&pts, radius, &except, &visit);
+            coarse.force_coarse = n != 4_000;
+            coarse.build_visiting(&pts, radius, &except, &visit);
+            assert!(!fine.coarse && coarse.coarse, "{n} points");
+            assert_eq!(coarse.cell(), fine.cell());
+            for wide in [false, true] {
+                if wide && !wide_collect() {
+                    continue;
+                }
+                for k in [2, 5, 16] {
+                    for (i, &p) in pts.iter().enumerate() {
+                        let (mut a, mut b) = ([0u32; MAX_K], [0u32; MAX_K]);
+                        let na = fine.nearest_scanning(p, radius, k, i, &mut a, wide);
+                        let nb = coarse.nearest_scanning(p, radius, k, i, &mut b, wide);
+                        assert_eq!(a[..na], b[..nb], "point {i}, k {k}, wide {wide}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
