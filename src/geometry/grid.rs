@@ -1072,6 +1072,7 @@ const SORT_CELLS_PER_AGENT: usize = 2;
 fn sorts_in_pieces(agents: usize, cells: usize) -> bool {
     agents >= PARALLEL_SORT && cells <= SORT_CELLS_PER_AGENT * agents
 }
+
 /// At most this many pieces (each has its own counts over every cell).
 const MAX_SORT_PIECES: usize = 8;
 
