@@ -346,11 +346,13 @@ impl CacheWriter for GltfWriter {
                     bee_t.x, bee_t.y, bee_t.z, bee_r.x, bee_r.y, bee_r.z, bee_r.w, lateral,
                     body_r.x, body_r.y, body_r.z, body_r.w, scale, shown,
                 ];
+                // The record's bytes written in place (zero past its floats).
                 let at = self.record.len();
-                for v in rec.into_iter().chain(driven.clone()) {
-                    self.record.extend_from_slice(&v.to_le_bytes());
-                }
                 self.record.resize(at + self.record_bytes, 0);
+                let bytes = self.record[at..].chunks_exact_mut(4);
+                for (b, v) in bytes.zip(rec.into_iter().chain(driven.clone())) {
+                    b.copy_from_slice(&v.to_le_bytes());
+                }
                 if first {
                     self.bees.push(BeeState {
                         first: rec,

@@ -517,11 +517,15 @@ impl Model for BeeModel {
     }
 
     fn pose(&self, b: &Bee, dt: f32) -> Pose {
-        let orientation = attitude(b.c.yaw, b.pitch_deg, b.drawn_roll_deg);
+        // `attitude`, its heading factor worked out once for both.
+        let heading = Quat::from_rotation_y(b.c.yaw);
+        let orientation = heading
+            * Quat::from_rotation_z(b.pitch_deg.to_radians())
+            * Quat::from_rotation_x(b.drawn_roll_deg.to_radians());
         let (y, p, r) = b.prev_attitude;
         Pose {
             orientation,
-            heading: Quat::from_rotation_y(b.c.yaw),
+            heading,
             angular_velocity_deg: math::angular_velocity(attitude(y, p, r), orientation, dt)
                 * (180.0 / std::f32::consts::PI),
         }
