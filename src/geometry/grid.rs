@@ -97,8 +97,39 @@ pub struct Grid {
 #[derive(Clone, Copy, Debug, Default)]
 struct FineCells {
     cell: f32,
-    inv_cell: f32,
+    inv_cell: Vec3,
     dims: IVec3,
+}
+
+/// 1 / cell edge along each axis, for cells `split` times thinner along x.
+fn inv_cell(cell: f32, split: i32) -> Vec3 {
+    Vec3::new(split as f32 / cell, 1.0 / cell, 1.0 / cell)
+}
+
+/// Cells along each axis of a layout over the box `lo..hi` with `inv_cell`.
+fn dims_in(lo: Vec3, hi: Vec3, inv_cell: Vec3) -> IVec3 {
+    let extent = (hi - lo).max(Vec3::splat(1e-6));
+    ((extent * inv_cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE)
+}
+
+/// Cell coordinates of `p` in a layout at `origin` with `inv_cell` and `dims`, clamped
+/// into it.
+#[inline(always)]
+fn cell_in(p: Vec3, origin: Vec3, inv_cell: Vec3, dims: IVec3) -> IVec3 {
+    // Clamped into [0, dims − 1] in floats, then truncated: at or above 0 truncation is
+    // the floor, and the bounds are whole numbers (exact in f32), so this is the floor
+    // clamped into the grid, without a branch per axis. NaN-free positions are guaranteed.
+    let max = (dims - IVec3::ONE).as_vec3();
+    ((p - origin) * inv_cell)
+        .max(Vec3::ZERO)
+        .min(max)
+        .as_ivec3()
+}
+
+/// The index of cell `c` in a layout with `dims` (rows along x, then y, then z).
+#[inline(always)]
+fn index_in(c: IVec3, dims: IVec3) -> usize {
+    (c.x + dims.x * (c.y + dims.y * c.z)) as usize
 }
 
 /// A build tries cells of twice the radius (a query then walks the 2 × 2 rows of 2 cells
@@ -118,20 +149,12 @@ impl Grid {
     /// the last build land in the border cells, which keeps queries valid).
     #[inline]
     fn cell_of(&self, p: Vec3) -> IVec3 {
-        // Clamped into [0, dims − 1] in floats, then truncated: at or above 0 truncation
-        // is the floor, and the bounds are whole numbers (exact in f32), so this is the
-        // floor clamped into the grid, without a branch per axis. NaN-free positions are
-        // guaranteed.
-        let max = (self.dims - IVec3::ONE).as_vec3();
-        ((p - self.origin) * self.inv_cell)
-            .max(Vec3::ZERO)
-            .min(max)
-            .as_ivec3()
+        cell_in(p, self.origin, self.inv_cell, self.dims)
     }
 
     #[inline]
     fn index(&self, c: IVec3) -> usize {
-        (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize
+        index_in(c, self.dims)
     }
 
     /// Every point's index, cell by cell (rows of cells along x; within a cell, in the
@@ -209,14 +232,11 @@ impl Grid {
             self.sort(positions, except, visit);
             if self.crowd(n) <= COARSE_CROWD || self.force_coarse {
                 self.coarse = true;
-                let dims = ((hi - lo).max(Vec3::splat(1e-6)) * (1.0 / fine))
-                    .floor()
-                    .as_ivec3()
-                    + IVec3::ONE;
+                let inv_cell = inv_cell(fine, 1);
                 self.fine = FineCells {
                     cell: fine,
-                    inv_cell: 1.0 / fine,
-                    dims: dims.max(IVec3::ONE),
+                    inv_cell,
+                    dims: dims_in(lo, hi, inv_cell),
                 };
                 return;
             }
@@ -283,12 +303,11 @@ impl Grid {
     }
 
     fn layout(&mut self, lo: Vec3, hi: Vec3, cell: f32, split: i32) {
-        let extent = (hi - lo).max(Vec3::splat(1e-6));
         self.origin = lo;
         self.cell = cell;
         self.split = split;
-        self.inv_cell = Vec3::new(split as f32 / cell, 1.0 / cell, 1.0 / cell);
-        self.dims = ((extent * self.inv_cell).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
+        self.inv_cell = inv_cell(cell, split);
+        self.dims = dims_in(lo, hi, self.inv_cell);
     }
 
     /// Counting sort of the agents by cell, in the order of `visit` (empty: by index),
@@ -1334,17 +1353,11 @@ impl Scan<'_> {
         if n < 2 {
             return;
         }
-        let max = (fine.dims - IVec3::ONE).as_vec3();
         let key = |s: u32| -> u64 {
             let i = s as usize;
             let q = Vec3::new(self.xs[i], self.ys[i], self.zs[i]);
-            // As `Grid::cell_of` on the fine layout.
-            let c = ((q - origin) * fine.inv_cell)
-                .max(Vec3::ZERO)
-                .min(max)
-                .as_ivec3();
-            let index = (c.x + fine.dims.x * (c.y + fine.dims.y * c.z)) as u64;
-            (index << 32) | s as u64
+            let c = cell_in(q, origin, fine.inv_cell, fine.dims);
+            ((index_in(c, fine.dims) as u64) << 32) | s as u64
         };
         let mut keys = [0u64; COLLECT + WIDE_LANES];
         for (k, &s) in keys.iter_mut().zip(&found.slots[..n]) {

@@ -968,12 +968,12 @@ impl Simulation {
             } else {
                 &[]
             };
-            // Visited by id: the order within the grid's cells, so the lists' order, is
-            // then the same wherever the agents are stored.
             // Coarse cells where sparse: the same lists in the same order, but a frame
             // keeping candidates searches them with `Grid::within`, whose order is the
             // walk's own.
             self.grid.allow_coarse(!self.keeps);
+            // Visited by id: the order within the grid's cells, so the lists' order, is
+            // then the same wherever the agents are stored.
             self.grid
                 .build_visiting(&self.positions, self.grid_cell, except, &self.slots);
             // Between rebuilds the candidates name agents by index: keep them in place.
