@@ -105,7 +105,14 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 /// `Ry(yaw) * Rz(pitch) * Rx(roll)` — X forward, Y up, Z right.
 #[inline]
 pub fn body_orientation(yaw: f32, pitch: f32, roll: f32) -> Quat {
-    Quat::from_rotation_y(yaw) * Quat::from_rotation_z(pitch) * Quat::from_rotation_x(roll)
+    body_orientation_after(Quat::from_rotation_y(yaw), pitch, roll)
+}
+
+/// [`body_orientation`] from the heading's rotation `Ry(yaw)`, for callers that need it
+/// too (the same bits).
+#[inline]
+pub fn body_orientation_after(heading: Quat, pitch: f32, roll: f32) -> Quat {
+    heading * Quat::from_rotation_z(pitch) * Quat::from_rotation_x(roll)
 }
 
 /// `floor` as an integer without a library call (x86-64 without SSE4.1 has no floor

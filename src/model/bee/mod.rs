@@ -517,11 +517,13 @@ impl Model for BeeModel {
     }
 
     fn pose(&self, b: &Bee, dt: f32) -> Pose {
-        // `attitude`, its heading factor worked out once for both.
+        // `attitude`, its heading's rotation worked out once for both.
         let heading = Quat::from_rotation_y(b.c.yaw);
-        let orientation = heading
-            * Quat::from_rotation_z(b.pitch_deg.to_radians())
-            * Quat::from_rotation_x(b.drawn_roll_deg.to_radians());
+        let orientation = math::body_orientation_after(
+            heading,
+            b.pitch_deg.to_radians(),
+            b.drawn_roll_deg.to_radians(),
+        );
         let (y, p, r) = b.prev_attitude;
         Pose {
             orientation,
