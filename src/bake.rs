@@ -125,6 +125,9 @@ pub fn bake_resumable(
         }
         None => (None, None),
     };
+    // Angular velocities only for the caches that hold them, and the journal, whose
+    // frames a resumed bake sends to its writers as they were.
+    sim.record_spin(opts.formats.contains(&Format::Usda) || checkpoints.is_some());
     let meta = sim.meta();
     let info = SetInfo::of(shot);
     let out_dir = opts.out_dir;

@@ -147,6 +147,16 @@ pub fn wrap_tau(a: f32) -> f32 {
     }
 }
 
+/// The recorded angular velocity, degrees per second (world frame), of the turn from
+/// `from()` to `to` over the substep `spin_dt`; zero, with `from` never worked out, when
+/// no cache asks for it (`spin_dt` is `None`: see `sim::Simulation::record_spin`).
+#[inline]
+pub fn spin_deg(spin_dt: Option<f32>, from: impl FnOnce() -> Quat, to: Quat) -> Vec3 {
+    spin_dt.map_or(Vec3::ZERO, |dt| {
+        angular_velocity(from(), to, dt) * (180.0 / std::f32::consts::PI)
+    })
+}
+
 /// Angular velocity (rad/s, world frame) taking `from` to `to` in `dt` seconds.
 pub fn angular_velocity(from: Quat, to: Quat, dt: f32) -> Vec3 {
     let mut d = to * from.inverse();

@@ -205,3 +205,67 @@ fn another_seed_gives_another_swarm() {
         assert_ne!(a, b, "{name}");
     }
 }
+
+#[test]
+fn a_cache_is_the_same_whichever_other_caches_the_bake_writes() {
+    // A bake without USDA records no angular velocities (`Simulation::record_spin`): its
+    // glb and CSV are those of a bake that also writes USDA, and USDA's own
+    // angularVelocities are the turning bees' (not zeros) whatever else is written.
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("spin.toml");
+    std::fs::write(
+        &shot,
+        "[scene]\nname = \"spin\"\nfps = 24\nframes = [1, 6]\nseed = 3\n\
+         [[swarm]]\ncount = 40\n",
+    )
+    .unwrap();
+    let bake = |formats: &str| {
+        let out = dir.path().join(formats.replace(',', "-"));
+        let status = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+            .args([
+                "bake",
+                shot.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(["--format", formats, "--progress", "none"])
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+        out
+    };
+    let (all, glb, usda) = (bake("glb,csv,usda"), bake("glb,csv"), bake("usda"));
+    for name in ["spin.glb", "spin.tracks.csv"] {
+        let a = std::fs::read(all.join(name)).unwrap();
+        assert!(a == std::fs::read(glb.join(name)).unwrap(), "{name}");
+    }
+    let text = std::fs::read_to_string(all.join("spin.usda")).unwrap();
+    assert_eq!(
+        text,
+        std::fs::read_to_string(usda.join("spin.usda")).unwrap()
+    );
+    // From frame 2 on (a bee's first frame has no substep before it), the bees turn.
+    let samples = text
+        .split("angularVelocities.timeSamples = {")
+        .nth(1)
+        .unwrap();
+    let samples = &samples[..samples.find('}').unwrap()];
+    let turning = samples
+        .split('(')
+        .skip(1)
+        .map(|v| {
+            v[..v.find(')').unwrap()]
+                .split(", ")
+                .map(|x| x.parse::<f32>().unwrap())
+        })
+        .filter(|w| w.clone().any(|x| x.abs() > 1.0))
+        .count();
+    assert!(
+        turning > 40,
+        "angularVelocities hold the bees' turns: {turning}"
+    );
+}

@@ -412,17 +412,17 @@ impl Flyer {
         Flyer { c, prev_yaw: c.yaw }
     }
 
-    /// The attitude of level flight along the heading.
-    pub fn pose(&self, dt: f32) -> super::Pose {
+    /// The attitude of level flight along the heading (`Model::pose`).
+    pub fn pose(&self, spin_dt: Option<f32>) -> super::Pose {
         let orientation = math::body_orientation(self.c.yaw, 0.0, 0.0);
         super::Pose {
             orientation,
             heading: glam::Quat::from_rotation_y(self.c.yaw),
-            angular_velocity_deg: math::angular_velocity(
-                math::body_orientation(self.prev_yaw, 0.0, 0.0),
+            angular_velocity_deg: math::spin_deg(
+                spin_dt,
+                || math::body_orientation(self.prev_yaw, 0.0, 0.0),
                 orientation,
-                dt,
-            ) * (180.0 / std::f32::consts::PI),
+            ),
         }
     }
 }

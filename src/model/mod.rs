@@ -209,7 +209,8 @@ pub struct Pose {
     pub orientation: Quat,
     /// Heading only: rotation about world +Y.
     pub heading: Quat,
-    /// Angular velocity over the last substep, degrees per second, world frame.
+    /// Angular velocity over the last substep, degrees per second, world frame (zero
+    /// when not asked for: `Model::pose`).
     pub angular_velocity_deg: Vec3,
 }
 
@@ -290,8 +291,9 @@ pub trait Model: Sized + Send + Sync {
     /// The agent's next state after one substep. `i` is its global index.
     fn step(&self, cx: &Context, i: usize, agent: &Self::Agent) -> Self::Agent;
 
-    /// The agent's attitude for the caches.
-    fn pose(&self, agent: &Self::Agent, dt: f32) -> Pose;
+    /// The agent's attitude for the caches; its angular velocity over the last substep,
+    /// `spin_dt` seconds long, only when asked for (`None`: zero, and not worked out).
+    fn pose(&self, agent: &Self::Agent, spin_dt: Option<f32>) -> Pose;
 
     /// Writes one value per channel of `INFO.channels`.
     fn record(&self, agent: &Self::Agent, pose: &Pose, channels: &mut [f32]);

@@ -126,8 +126,9 @@ trait Swarm: Send + Sync {
     /// Places the agent stored at (swarm) index `k`.
     fn place(&mut self, k: usize, position: Vec3, velocity: Vec3);
     /// Fills the frame record of this swarm, agents in id order: `slots[k]` is the global
-    /// index of its agent with id `first_id + k`.
-    fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32, slots: &[u32]);
+    /// index of its agent with id `first_id + k`. Angular velocities over the last
+    /// substep, `spin_dt` seconds, only when asked for (`None`: zeros).
+    fn record(&mut self, f: &mut SwarmFrame, first_id: u64, spin_dt: Option<f32>, slots: &[u32]);
     /// Appends the agents' state in id order (checkpoints; `slots` as for `record`).
     fn agent_bytes(&self, out: &mut Vec<u8>, slots: &[u32]);
     /// Replaces the agents' state with bytes from `agent_bytes` (stored in id order); false
@@ -396,7 +397,7 @@ where
         self.agents[k].place(position, velocity);
     }
 
-    fn record(&mut self, f: &mut SwarmFrame, first_id: u64, dt: f32, slots: &[u32]) {
+    fn record(&mut self, f: &mut SwarmFrame, first_id: u64, spin_dt: Option<f32>, slots: &[u32]) {
         debug_assert!(self.moved.is_empty(), "a new order waits for its step");
         let n = self.agents.len();
         let channels = M::INFO.channels.len();
@@ -440,7 +441,7 @@ where
                         prefetch(&agents[ahead as usize - start]);
                     }
                     let a = &agents[slot as usize - start];
-                    let pose = m.pose(a, dt);
+                    let pose = m.pose(a, spin_dt);
                     m.record(a, &pose, &mut values[..channels]);
                     *id = first_id + k as u64;
                     *pos = a.position();
@@ -535,6 +536,8 @@ pub struct Simulation {
     frame: i32,
     step_index: u64,
     record: Vec<SwarmFrame>,
+    /// Whether the record holds angular velocities ([`Simulation::record_spin`]).
+    spin: bool,
     /// Set from outside (Ctrl-C) to stop a frame part-way; see [`Simulation::advance_or_cancel`].
     cancel: &'static AtomicBool,
 }
@@ -784,6 +787,7 @@ impl Simulation {
             max_body_radius,
             step_index: 0,
             record: Vec::new(),
+            spin: true,
             cancel: &NEVER,
         };
         sim.store_by_id();
@@ -833,6 +837,15 @@ impl Simulation {
     /// Seconds since the first frame.
     pub fn time(&self) -> f64 {
         (self.frame - self.shot.frame_start) as f64 / self.shot.fps
+    }
+
+    /// Whether the frames recorded from now on hold each agent's angular velocity (on by
+    /// default). Only USDA's `angularVelocities` and the checkpoint journal read it; a bake
+    /// writing neither turns it off, and its poses skip that work (about a third of the
+    /// bee's: the attitude a substep earlier, three sines and cosines, and the turn
+    /// between them). Off, `SwarmFrame::angular_velocity_deg` holds zeros.
+    pub fn record_spin(&mut self, on: bool) {
+        self.spin = on;
     }
 
     /// The state at the current frame, one entry per swarm.
@@ -1299,13 +1312,13 @@ impl Simulation {
     }
 
     fn update_record(&mut self) {
-        let dt = self.shot.dt() as f32;
+        let spin_dt = self.spin.then_some(self.shot.dt() as f32);
         let mut rec = std::mem::take(&mut self.record);
         rec.resize_with(self.swarms.len(), SwarmFrame::default);
         let mut id = 0;
         for (swarm, f) in self.swarms.iter_mut().zip(&mut rec) {
             let n = swarm.len();
-            swarm.record(f, id as u64, dt, &self.slots[id..id + n]);
+            swarm.record(f, id as u64, spin_dt, &self.slots[id..id + n]);
             id += n;
         }
         self.record = rec;
@@ -1542,6 +1555,44 @@ mod tests {
         }
         assert!(!s.keeps && s.skin == 0.0 && !s.sorted);
         assert!(s.previous.is_empty() && s.built.is_empty());
+    }
+
+    #[test]
+    fn a_record_without_spin_differs_only_in_its_zero_angular_velocities() {
+        // Off (a bake writing no USDA), every model's poses skip the angular velocity:
+        // the state and every other column stay the same bit for bit.
+        let bits = |f: &SwarmFrame| -> Vec<u32> {
+            let vecs = f
+                .position
+                .iter()
+                .chain(&f.velocity)
+                .flat_map(|v| v.to_array());
+            let quats = f.orientation.iter().chain(&f.heading);
+            vecs.chain(quats.flat_map(|q| q.to_array()))
+                .chain(f.scale.iter().copied())
+                .chain(f.channels.iter().flatten().copied())
+                .map(f32::to_bits)
+                .collect()
+        };
+        for kind in crate::model::ModelKind::ALL {
+            let name = kind.info().name;
+            let (mut with, mut without) = (sim(name, 200), sim(name, 200));
+            without.record_spin(false);
+            for _ in 0..3 {
+                with.advance();
+                without.advance();
+                let (a, b) = (&with.record()[0], &without.record()[0]);
+                assert_eq!(a.ids, b.ids, "{name}");
+                assert_eq!(bits(a), bits(b), "{name}");
+                assert!(
+                    b.angular_velocity_deg.iter().all(|&w| w == Vec3::ZERO),
+                    "{name}"
+                );
+                assert_eq!(a.angular_velocity_deg.len(), b.len(), "{name}");
+            }
+            let turning = with.record()[0].angular_velocity_deg.iter();
+            assert!(turning.filter(|w| w.length() > 1.0).count() > 10, "{name}");
+        }
     }
 
     #[test]

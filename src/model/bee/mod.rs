@@ -516,7 +516,7 @@ impl Model for BeeModel {
         out
     }
 
-    fn pose(&self, b: &Bee, dt: f32) -> Pose {
+    fn pose(&self, b: &Bee, spin_dt: Option<f32>) -> Pose {
         // `attitude`, its heading's rotation worked out once for both.
         let heading = Quat::from_rotation_y(b.c.yaw);
         let orientation = math::body_orientation_after(
@@ -528,8 +528,7 @@ impl Model for BeeModel {
         Pose {
             orientation,
             heading,
-            angular_velocity_deg: math::angular_velocity(attitude(y, p, r), orientation, dt)
-                * (180.0 / std::f32::consts::PI),
+            angular_velocity_deg: math::spin_deg(spin_dt, || attitude(y, p, r), orientation),
         }
     }
 

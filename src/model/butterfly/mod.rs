@@ -337,17 +337,17 @@ impl Model for ButterflyModel {
         }
     }
 
-    fn pose(&self, b: &Butterfly, dt: f32) -> Pose {
+    fn pose(&self, b: &Butterfly, spin_dt: Option<f32>) -> Pose {
         let pitch = maneuvering::angle(Angle::Pitch, b.s, b.pitch_phase);
         let orientation = Self::orientation(b.yaw, pitch);
         Pose {
             orientation,
             heading: Quat::from_rotation_y(b.yaw),
-            angular_velocity_deg: math::angular_velocity(
-                Self::orientation(b.prev_yaw, b.prev_pitch),
+            angular_velocity_deg: math::spin_deg(
+                spin_dt,
+                || Self::orientation(b.prev_yaw, b.prev_pitch),
                 orientation,
-                dt,
-            ) * (180.0 / std::f32::consts::PI),
+            ),
         }
     }
 

@@ -143,8 +143,8 @@ impl Model for CurlModel {
         }
     }
 
-    fn pose(&self, b: &Flyer, dt: f32) -> Pose {
-        b.pose(dt)
+    fn pose(&self, b: &Flyer, spin_dt: Option<f32>) -> Pose {
+        b.pose(spin_dt)
     }
 
     fn record(&self, _: &Flyer, _: &Pose, _: &mut [f32]) {}

@@ -297,8 +297,8 @@ impl Model for FastswarmModel {
         }
     }
 
-    fn pose(&self, b: &Insect, dt: f32) -> Pose {
-        b.fly.pose(dt)
+    fn pose(&self, b: &Insect, spin_dt: Option<f32>) -> Pose {
+        b.fly.pose(spin_dt)
     }
 
     fn record(&self, b: &Insect, _: &Pose, channels: &mut [f32]) {

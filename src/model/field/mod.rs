@@ -289,13 +289,12 @@ impl Model for FieldModel {
         }
     }
 
-    fn pose(&self, a: &Insect, dt: f32) -> Pose {
+    fn pose(&self, a: &Insect, spin_dt: Option<f32>) -> Pose {
         let orientation = a.attitude.orientation();
         Pose {
             orientation,
             heading: glam::Quat::from_rotation_y(a.attitude.yaw),
-            angular_velocity_deg: math::angular_velocity(a.prev.orientation(), orientation, dt)
-                * (180.0 / std::f32::consts::PI),
+            angular_velocity_deg: math::spin_deg(spin_dt, || a.prev.orientation(), orientation),
         }
     }
 

@@ -298,8 +298,8 @@ impl Model for ZonalModel {
         }
     }
 
-    fn pose(&self, a: &Insect, dt: f32) -> Pose {
-        a.f.pose(dt)
+    fn pose(&self, a: &Insect, spin_dt: Option<f32>) -> Pose {
+        a.f.pose(spin_dt)
     }
 
     fn record(&self, a: &Insect, _: &Pose, channels: &mut [f32]) {
