@@ -146,6 +146,8 @@ pub fn bake_resumable(
     let total = shot.frame_count();
     std::thread::scope(|scope| {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Message>(2);
+        // Frames written go back to the simulation, which records later frames into them.
+        let (recycle, written) = std::sync::mpsc::channel::<Vec<SwarmFrame>>();
         let writer = scope.spawn(move || -> Result<Vec<PathBuf>> {
             for msg in rx {
                 match msg {
@@ -162,6 +164,7 @@ pub fn bake_resumable(
                         for w in writers.iter_mut() {
                             w.write_frame(&f)?;
                         }
+                        let _ = recycle.send(swarms);
                     }
                     Message::Done => {
                         // Seal every file of every format, then replace the set. An
@@ -188,6 +191,7 @@ pub fn bake_resumable(
             Err(Error::bake(INTERRUPTED_MESSAGE))
         });
         let simulated = with_threads(opts.threads, || -> Result<()> {
+            let written = written; // (moved in: a receiver is not shared between threads)
             for done in 1..=total {
                 let replayed = replay.as_mut().map(|r| r.next_frame()).transpose()?;
                 let (frame, msg) = if let Some(f) = replayed.flatten() {
@@ -208,10 +212,12 @@ pub fn bake_resumable(
                     if let Some(ck) = checkpointer.as_mut() {
                         ck.after_frame(&sim)?;
                     }
+                    let mut swarms = written.try_recv().unwrap_or_default();
+                    sim.swap_record(&mut swarms);
                     let msg = Message::Frame {
                         frame: sim.frame(),
                         time: sim.time(),
-                        swarms: sim.record().to_vec(),
+                        swarms,
                     };
                     (sim.frame(), msg)
                 };

@@ -538,6 +538,8 @@ pub struct Simulation {
     record: Vec<SwarmFrame>,
     /// Whether the record holds angular velocities ([`Simulation::record_spin`]).
     spin: bool,
+    /// The record was handed over ([`Simulation::swap_record`]) since it was made.
+    record_handed: bool,
     /// Set from outside (Ctrl-C) to stop a frame part-way; see [`Simulation::advance_or_cancel`].
     cancel: &'static AtomicBool,
 }
@@ -788,6 +790,7 @@ impl Simulation {
             step_index: 0,
             record: Vec::new(),
             spin: true,
+            record_handed: false,
             cancel: &NEVER,
         };
         sim.store_by_id();
@@ -850,7 +853,20 @@ impl Simulation {
 
     /// The state at the current frame, one entry per swarm.
     pub fn record(&self) -> &[SwarmFrame] {
+        debug_assert!(
+            !self.record_handed,
+            "the record was handed over (`swap_record`)"
+        );
         &self.record
+    }
+
+    /// Hands over the current frame's record (`record`) in exchange for `spare`, an older
+    /// frame's record that is no longer needed (or an empty one), whose buffers the next
+    /// frame's record is written into: no copy, no allocation. Until the next frame
+    /// `record` is not to be read.
+    pub fn swap_record(&mut self, spare: &mut Vec<SwarmFrame>) {
+        std::mem::swap(&mut self.record, spare);
+        self.record_handed = true;
     }
 
     pub fn meta(&self) -> CacheMeta {
@@ -1322,6 +1338,7 @@ impl Simulation {
             id += n;
         }
         self.record = rec;
+        self.record_handed = false;
     }
 }
 
