@@ -7,7 +7,7 @@ pub mod grid;
 pub mod mesh;
 
 use glam::{Quat, Vec3};
-pub use grid::Grid;
+pub use grid::{Found, Grid};
 
 /// Obstacle geometry. Rotations are body → world. Cloning is cheap: a mesh is shared, not
 /// copied.

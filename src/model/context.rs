@@ -8,7 +8,7 @@
 //! names it in the caches — is [`Context::id`].
 
 use super::targets::TargetKind;
-use crate::geometry::{Grid, Shape, SurfaceQuery};
+use crate::geometry::{Found, Grid, Shape, SurfaceQuery};
 use crate::math::Rng;
 use glam::Vec3;
 
@@ -53,8 +53,9 @@ impl Default for NeighbourList {
 impl NeighbourList {
     /// Lists the (at most `MAX_NEIGHBOURS`) agents nearest `p` within `radius`, other than
     /// agent `me`, in the grid's order.
-    pub(crate) fn fill(&mut self, grid: &Grid, p: Vec3, radius: f32, me: usize) {
-        self.len = grid.nearest(p, radius, MAX_NEIGHBOURS, me, &mut self.idx) as u8;
+    /// The grid's query collects its candidates in `found` (`Grid::nearest_with`).
+    pub(crate) fn fill(&mut self, grid: &Grid, p: Vec3, radius: f32, me: usize, found: &mut Found) {
+        self.len = grid.nearest_with(p, radius, MAX_NEIGHBOURS, me, &mut self.idx, found) as u8;
     }
 
     /// Puts the list in increasing id order (`ids`: every agent's id by index; insertion

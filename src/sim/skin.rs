@@ -36,7 +36,7 @@
 //! 34 mm and a skin of a few centimetres holds hundreds) keeps none and is queried afresh
 //! every substep, on a grid then rebuilt every substep.
 
-use crate::geometry::Grid;
+use crate::geometry::{Found, Grid};
 use crate::model::context::{MAX_NEIGHBOURS, NeighbourList};
 use glam::Vec3;
 
@@ -208,7 +208,7 @@ pub fn build(
         }
         &mut found[..kept]
     } else {
-        list.fill(grid, p, radius, me);
+        list.fill(grid, p, radius, me, &mut Found::default());
         list.sort(ids);
         let n = list.indices().len();
         let kth = if n == MAX_NEIGHBOURS {
@@ -257,7 +257,7 @@ mod tests {
         let mut g = Grid::default();
         g.build(pts, radius);
         let mut list = NeighbourList::default();
-        list.fill(&g, pts[i], radius, i);
+        list.fill(&g, pts[i], radius, i, &mut Found::default());
         list.sort(ids);
         // A tie at the k-th distance: either choice is right.
         let r2 = radius * radius;

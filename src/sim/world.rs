@@ -19,7 +19,7 @@
 use super::agent_bytes::AgentBytes;
 use super::frame::{CacheMeta, SwarmFrame, SwarmMeta};
 use super::skin;
-use crate::geometry::{self, Grid, Shape};
+use crate::geometry::{self, Found, Grid, Shape};
 use crate::math::{Rng, normalize_or};
 use crate::model::context::NeighbourList;
 use crate::model::{
@@ -262,7 +262,7 @@ where
                     .zip(gathered.par_iter_mut())
                     .enumerate()
                     .with_min_len(piece(n, 256))
-                    .for_each(|(k, (list, g))| {
+                    .for_each_init(Found::default, |found, (k, (list, g))| {
                         // Cancelled: the rest of this pass is skipped (the state is abandoned).
                         if cancel.load(Ordering::Relaxed) {
                             return;
@@ -270,7 +270,7 @@ where
                         let i = start + k;
                         let (from, len) = if reuse { ranges[k] } else { NO_CANDIDATES };
                         if from == u32::MAX {
-                            list.fill(grid, positions[i], radius(i), i);
+                            list.fill(grid, positions[i], radius(i), i, found);
                             // Among reused lists, in their order (see `Simulation::sorted`).
                             if reuse || sort {
                                 list.sort(ids);
