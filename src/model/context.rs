@@ -52,8 +52,8 @@ impl Default for NeighbourList {
 
 impl NeighbourList {
     /// Lists the (at most `MAX_NEIGHBOURS`) agents nearest `p` within `radius`, other than
-    /// agent `me`, in the grid's order.
-    /// The grid's query collects its candidates in `found` (`Grid::nearest_with`).
+    /// agent `me`, in the grid's order; the query collects its candidates in `found`
+    /// (`Grid::nearest_with`).
     pub(crate) fn fill(&mut self, grid: &Grid, p: Vec3, radius: f32, me: usize, found: &mut Found) {
         self.len = grid.nearest_with(p, radius, MAX_NEIGHBOURS, me, &mut self.idx, found) as u8;
     }
