@@ -11,7 +11,6 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
 const SHOT: &str = r#"
 [scene]
@@ -127,9 +126,8 @@ fn bake_shot(dir: &Path, src: &str, threads: usize, seed: Option<u64>) -> Vec<(S
     std::fs::write(&shot, src).unwrap();
     std::fs::write(dir.join("ball.obj"), ball_obj()).unwrap();
     let out = dir.join(format!("t{threads}-{}", seed.unwrap_or(0)));
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
-    cmd.args([
-        "bake",
+    let threads = threads.to_string();
+    let mut args = vec![
         shot.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
@@ -140,17 +138,13 @@ fn bake_shot(dir: &Path, src: &str, threads: usize, seed: Option<u64>) -> Vec<(S
         "--progress",
         "none",
         "--threads",
-        &threads.to_string(),
-    ]);
-    if let Some(s) = seed {
-        cmd.args(["--seed", &s.to_string()]);
+        &threads,
+    ];
+    let seed = seed.map(|s| s.to_string());
+    if let Some(s) = &seed {
+        args.extend(["--seed", s]);
     }
-    let status = cmd.output().unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    common::bake_ok(args);
     let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| {
@@ -221,21 +215,8 @@ fn a_cache_is_the_same_whichever_other_caches_the_bake_writes() {
     .unwrap();
     let bake = |formats: &str| {
         let out = dir.path().join(formats.replace(',', "-"));
-        let status = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
-            .args([
-                "bake",
-                shot.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .args(["--format", formats, "--progress", "none"])
-            .output()
-            .unwrap();
-        assert!(
-            status.status.success(),
-            "{}",
-            String::from_utf8_lossy(&status.stderr)
-        );
+        let (shot, to) = (shot.to_str().unwrap(), out.to_str().unwrap());
+        common::bake_ok([shot, "--out", to, "--format", formats, "--progress", "none"]);
         out
     };
     let (all, glb, usda) = (bake("glb,csv,usda"), bake("glb,csv"), bake("usda"));

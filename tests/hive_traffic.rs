@@ -11,7 +11,6 @@ use beeswarm::sim::Simulation;
 use common::run_with;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hive_traffic.toml")
@@ -140,18 +139,19 @@ fn bees_go_in_and_come_out_through_the_entrance() {
 /// Bakes the example's first `frames` frames in every format into a temporary folder.
 fn bake_all(dir: &Path, frames: i32) -> PathBuf {
     let out = dir.join("out");
-    let status = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
-        .arg("bake")
-        .arg(example())
-        .args(["--out", out.to_str().unwrap(), "--format", "glb,usda,csv"])
-        .args(["--frames", &format!("1:{frames}"), "--progress", "none"])
-        .output()
-        .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    let frames = format!("1:{frames}");
+    let example = example();
+    common::bake_ok([
+        example.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--format",
+        "glb,usda,csv",
+        "--frames",
+        &frames,
+        "--progress",
+        "none",
+    ]);
     out
 }
 

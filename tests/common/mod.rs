@@ -62,6 +62,21 @@ pub fn assert_all_finite(sim: &Simulation) {
     }
 }
 
+/// Runs `beeswarm bake` with `args`, failing the test with its error output unless it
+/// succeeds.
+pub fn bake_ok<S: AsRef<std::ffi::OsStr>>(args: impl IntoIterator<Item = S>) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .arg("bake")
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Every file under `dir` (recursively), relative to it and `/`-separated, sorted.
 pub fn files_under(dir: &Path) -> Vec<String> {
     let mut out = Vec::new();
