@@ -27,6 +27,7 @@
 //! every floating-point sum visits them in — are the same whatever the number of threads.
 
 use glam::{IVec3, Vec3, Vec4};
+use std::mem::MaybeUninit;
 
 /// A crowd query first looks for its k nearest within this multiple of the distance that
 /// holds k at the local density, and then within `RETRY_MARGIN` times that.
@@ -778,7 +779,7 @@ impl Grid {
         // ring walk below would list, in its order.
         if beyond(self.cell + margin, radius, r2) {
             let ring1 = !beyond(margin, radius, r2);
-            let mut runs = Runs::default();
+            let mut runs = Runs::new();
             #[cfg(target_arch = "x86_64")]
             if scan.wide {
                 // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
@@ -823,7 +824,7 @@ impl Grid {
         // two reads of where its cells begin are then independent from row to row, instead
         // of waiting each time for the last row's scan (whose end the branch predictor
         // cannot foresee).
-        let mut runs = Runs::default();
+        let mut runs = Runs::new();
         for q in 0.. {
             if q > 0 && beyond((q - 1) as f32 * self.cell + margin, radius, r2) {
                 break;
@@ -886,8 +887,7 @@ impl Grid {
             let keep = inside & (ring1 | !outer) & (dyz2 < r2);
             let w = (r2 - dyz2).max(0.0).sqrt();
             let (y, z) = (y.clamp(0, d.y - 1), z.clamp(0, d.z - 1));
-            runs.runs[runs.len] = self.chord(p, y, z, w);
-            runs.len += keep as usize;
+            runs.put(self.chord(p, y, z, w), keep);
         }
     }
 
@@ -978,8 +978,7 @@ impl Grid {
             _mm512_storeu_si512(ends.as_mut_ptr().cast(), e);
         }
         for l in 0..9 {
-            runs.runs[runs.len] = (starts[l], ends[l]);
-            runs.len += ((keep >> l) & 1) as usize;
+            runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
         }
     }
 
@@ -1078,24 +1077,56 @@ fn for_each_placed(
 /// Rows a ring walk lists before collecting them.
 const RUNS: usize = 32;
 
-/// Runs `(start, end)` of the sorted arrays listed for collecting, in walk order.
-#[derive(Default)]
+/// Runs `(start, end)` of the sorted arrays listed for collecting, in walk order. The
+/// list starts uninitialised: zeroing its 256 bytes at every walk was a `memset` call, 1 %
+/// of a crowd's time, and only the first `len` entries, all written, are ever read.
 struct Runs {
-    runs: [(u32, u32); RUNS],
+    runs: MaybeUninit<[(u32, u32); RUNS]>,
     len: usize,
 }
 
 impl Runs {
     #[inline(always)]
+    fn new() -> Self {
+        // Not `Runs { runs: MaybeUninit::uninit(), len: 0 }`: the compiler makes that a
+        // constant, and a constant of zeros and uninitialised bytes is written with a
+        // `memset` of the whole.
+        let mut runs = MaybeUninit::<Runs>::uninit();
+        // SAFETY: `len` is written before `assume_init`; `runs` may stay uninitialised.
+        unsafe {
+            (&raw mut (*runs.as_mut_ptr()).len).write(0);
+            runs.assume_init()
+        }
+    }
+
+    /// Writes `run` at the end of the list, which then grows by one if `keep` (a list of
+    /// runs some of which are dropped, without a branch per run). The list must have room.
+    #[inline(always)]
+    fn put(&mut self, run: (u32, u32), keep: bool) {
+        assert!(self.len < RUNS);
+        // SAFETY: within the array (asserted).
+        unsafe {
+            self.runs
+                .as_mut_ptr()
+                .cast::<(u32, u32)>()
+                .add(self.len)
+                .write(run)
+        };
+        self.len += keep as usize;
+    }
+
+    #[inline(always)]
     fn push(&mut self, run: (u32, u32)) {
-        self.runs[self.len] = run;
-        self.len += 1;
+        self.put(run, true);
     }
 
     /// Collects every run listed, in order, and empties the list.
     #[inline(always)]
     fn flush(&mut self, scan: &Scan, r2: f32, found: &mut Found) {
-        scan.collect_runs(&self.runs[..self.len], r2, found);
+        // SAFETY: entries 0..len were written (`put`).
+        let runs: &[(u32, u32)] =
+            unsafe { std::slice::from_raw_parts(self.runs.as_ptr().cast(), self.len) };
+        scan.collect_runs(runs, r2, found);
         self.len = 0;
     }
 }
