@@ -176,7 +176,8 @@ fn crowding(w: &Swarm) -> String {
         if neighbours > CROWDED {
             line += &format!(
                 "\n      warning: more than {} neighbours per agent: each feels only its nearest {} \
-                 and a step costs 2–3× more; give the swarm a larger spawn region \
+                 and a step costs more (about 1.5 times as much at 100,000 per m³); give \
+                 the swarm a larger spawn region \
                  (at most {} agents per m³ here)",
                 CROWDED,
                 CROWDED,
