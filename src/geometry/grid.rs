@@ -1280,9 +1280,17 @@ impl Scan<'_> {
                 self.keep_nearest(found);
             }
             let g = l - a;
-            let dx = Vec4::from_slice(&xs[g..]) - px;
-            let dy = Vec4::from_slice(&ys[g..]) - py;
-            let dz = Vec4::from_slice(&zs[g..]) - pz;
+            // SAFETY: g < b − a, so g + LANES ≤ end − a, the slices' length.
+            let (x, y, z) = unsafe {
+                (
+                    xs.get_unchecked(g..g + LANES),
+                    ys.get_unchecked(g..g + LANES),
+                    zs.get_unchecked(g..g + LANES),
+                )
+            };
+            let dx = Vec4::from_slice(x) - px;
+            let dy = Vec4::from_slice(y) - py;
+            let dz = Vec4::from_slice(z) - pz;
             let d2 = dx * dx + dy * dy + dz * dz;
             let mut hits = d2.cmplt(r2).bitmask();
             // Lanes past the run, and the query's own point.
