@@ -1274,10 +1274,16 @@ impl Scan<'_> {
         let end = b + LANES - 1;
         let (xs, ys, zs) = (&self.xs[a..end], &self.ys[a..end], &self.zs[a..end]);
         let r2 = Vec4::splat(r2);
+        // The count in a local, written back only around the calls that cut the buffer:
+        // kept in `found` it was stored and reloaded at every group, a loop-carried wait
+        // on the store.
+        let mut len = found.len;
         let mut l = a;
         while l < b {
-            if found.len > COLLECT - LANES {
+            if len > COLLECT - LANES {
+                found.len = len;
                 self.keep_nearest(found);
+                len = found.len;
             }
             let g = l - a;
             // SAFETY: g < b − a, so g + LANES ≤ end − a, the slices' length.
@@ -1298,13 +1304,14 @@ impl Scan<'_> {
             let own = self.skip_slot.wrapping_sub(l as u32);
             hits &= !(((own < LANES as u32) as u32) << (own & 3));
             let lanes = &PACKED[hits as usize];
-            let out = &mut found.slots[found.len..found.len + LANES];
+            let out = &mut found.slots[len..len + LANES];
             for (o, &lane) in out.iter_mut().zip(lanes) {
                 *o = l as u32 + lane;
             }
-            found.len += hits.count_ones() as usize;
+            len += hits.count_ones() as usize;
             l += LANES;
         }
+        found.len = len;
     }
 
     /// [`Scan::collect`] sixteen candidates at a time with AVX-512: the same squared
