@@ -1265,6 +1265,36 @@ struct Scan<'a> {
 }
 
 impl Scan<'_> {
+    /// The lanes of the group of four from place `l` whose squared distance `d2` is below
+    /// `r2`, other than those past the run's end `b` and the query's own point.
+    #[inline(always)]
+    fn hits(&self, d2: Vec4, r2: Vec4, l: usize, b: usize) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::*;
+            // The two masks as integer compares of the lanes' places, in the vector
+            // registers: as scalar shifts and selects they were a third of the group's
+            // instructions. (Places fit an i32: a shot holds at most 10 million agents,
+            // and `skip_slot`'s u32::MAX, as −1, is no place.)
+            // SAFETY: SSE2 is part of x86-64.
+            unsafe {
+                let at = _mm_add_epi32(_mm_set1_epi32(l as i32), _mm_setr_epi32(0, 1, 2, 3));
+                let in_run = _mm_cmplt_epi32(at, _mm_set1_epi32(b as i32));
+                let own = _mm_cmpeq_epi32(at, _mm_set1_epi32(self.skip_slot as i32));
+                let keep = _mm_castsi128_ps(_mm_andnot_si128(own, in_run));
+                let near = _mm_cmplt_ps(d2.into(), r2.into());
+                _mm_movemask_ps(_mm_and_ps(near, keep)) as u32
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let mut hits = d2.cmplt(r2).bitmask();
+            hits &= (1 << (b - l).min(LANES)) - 1;
+            let own = self.skip_slot.wrapping_sub(l as u32);
+            hits & !(((own < LANES as u32) as u32) << (own & 3))
+        }
+    }
+
     /// Collects into `found` the place of every point of the sorted run `a..b` strictly
     /// within `r2` (squared) other than the query's own, four candidates at a time and
     /// without a branch per hit; when `found` is full it keeps the k nearest and goes on.
@@ -1298,11 +1328,7 @@ impl Scan<'_> {
             let dy = Vec4::from_slice(y) - py;
             let dz = Vec4::from_slice(z) - pz;
             let d2 = dx * dx + dy * dy + dz * dz;
-            let mut hits = d2.cmplt(r2).bitmask();
-            // Lanes past the run, and the query's own point.
-            hits &= (1 << (b - l).min(LANES)) - 1;
-            let own = self.skip_slot.wrapping_sub(l as u32);
-            hits &= !(((own < LANES as u32) as u32) << (own & 3));
+            let hits = self.hits(d2, r2, l, b);
             let lanes = &PACKED[hits as usize];
             let out = &mut found.slots[len..len + LANES];
             for (o, &lane) in out.iter_mut().zip(lanes) {
