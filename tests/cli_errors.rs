@@ -822,6 +822,27 @@ fn unknown_arguments_and_commands() {
     assert_says(&run.stderr, &["--bees and --frames must be at least 1"]);
 }
 
+/// `bench` prints one JSON line: its figures, and whether the AVX-512 paths ran (figures
+/// from CPUs with and without them do not compare).
+#[test]
+fn bench_prints_its_figures_and_whether_the_wide_paths_ran() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = beeswarm(
+        dir.path(),
+        &["bench", "--bees", "50", "--frames", "1", "--threads", "1"],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(run.stdout.trim()).unwrap();
+    assert_eq!(v["bees"], 50);
+    assert_eq!(v["bee_steps"], 200.0);
+    assert!(v["ns_per_bee_step"].as_f64().is_some_and(|ns| ns > 0.0));
+    #[cfg(target_arch = "x86_64")]
+    let wide = std::arch::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let wide = false;
+    assert_eq!(v["avx512"], wide);
+}
+
 #[test]
 fn good_arguments_are_accepted() {
     // Repeated and mixed-case formats, negative frames: exit 0 and exactly the CSV.
