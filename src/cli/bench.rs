@@ -183,22 +183,10 @@ pub fn run(a: BenchArgs) -> Result<()> {
             // the curl noise): without them a sparse bee-step took 18 % longer here
             // (docs/model.md), so figures from CPUs with and without AVX-512 do not
             // compare.
-            "avx512": avx512(),
+            "avx512": crate::geometry::grid::wide_collect(),
         })
     ));
     Ok(())
-}
-
-/// Whether this CPU takes the AVX-512 paths (every one of them checks the same feature).
-fn avx512() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
 }
 
 /// The share of the bees inside the spawn box after the last frame, to 3 decimals: how much

@@ -1211,9 +1211,10 @@ const WIDE_LANES: usize = 16;
 
 /// Whether this CPU takes the AVX-512 scan (`collect_wide`) and ranking
 /// (`ranked_below_wide`): the same candidates in the same order as four lanes at a time,
-/// so the same answers on every machine.
+/// so the same answers on every machine. The other AVX-512 paths (the pair sums, the curl
+/// noise) check the same feature, and `beeswarm bench` reports it.
 #[inline]
-fn wide_collect() -> bool {
+pub(crate) fn wide_collect() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx512f")
