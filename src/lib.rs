@@ -21,6 +21,7 @@ pub mod math;
 pub mod model;
 pub mod shot;
 pub mod sim;
+pub mod simd;
 pub mod species;
 pub mod wedge;
 

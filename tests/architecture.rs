@@ -97,7 +97,9 @@ fn top_level_modules_import_each_other_without_cycles() {
 #[test]
 fn lower_layers_import_neither_the_simulation_nor_the_writers() {
     let graph = imports();
-    for lower in ["math", "geometry", "field", "species", "model", "shot"] {
+    for lower in [
+        "math", "simd", "geometry", "field", "species", "model", "shot",
+    ] {
         let deps = graph.get(lower).cloned().unwrap_or_default();
         for upper in ["sim", "export", "bake", "cli", "eval", "plot"] {
             assert!(

@@ -17,7 +17,17 @@ struct Run {
 
 /// Runs `beeswarm args…` in `dir`.
 fn beeswarm(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+    beeswarm_with(dir, args, None)
+}
+
+/// [`beeswarm`] with `BEESWARM_SIMD` set to `simd` (unset for `None`).
+fn beeswarm_with(dir: &Path, args: &[&str], simd: Option<&str>) -> Run {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_beeswarm"));
+    match simd {
+        Some(v) => command.env(beeswarm::simd::ENV, v),
+        None => command.env_remove(beeswarm::simd::ENV),
+    };
+    let out = command
         .args(args)
         .current_dir(dir)
         .output()
@@ -822,25 +832,36 @@ fn unknown_arguments_and_commands() {
     assert_says(&run.stderr, &["--bees and --frames must be at least 1"]);
 }
 
-/// `bench` prints one JSON line: its figures, and whether the AVX-512 paths ran (figures
-/// from CPUs with and without them do not compare).
+/// `bench` prints one JSON line: its figures, and which wide paths ran (figures from
+/// different levels do not compare), which `BEESWARM_SIMD` caps; a cap that names no
+/// level is an error before anything runs.
 #[test]
-fn bench_prints_its_figures_and_whether_the_wide_paths_ran() {
+fn bench_prints_its_figures_and_which_wide_paths_ran() {
     let dir = tempfile::tempdir().unwrap();
-    let run = beeswarm(
-        dir.path(),
-        &["bench", "--bees", "50", "--frames", "1", "--threads", "1"],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let v: serde_json::Value = serde_json::from_str(run.stdout.trim()).unwrap();
+    let args = ["bench", "--bees", "50", "--frames", "1", "--threads", "1"];
+    let json = |run: &Run| -> serde_json::Value {
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        serde_json::from_str(run.stdout.trim()).unwrap()
+    };
+    let v = json(&beeswarm_with(dir.path(), &args, None));
     assert_eq!(v["bees"], 50);
     assert_eq!(v["bee_steps"], 200.0);
     assert!(v["ns_per_bee_step"].as_f64().is_some_and(|ns| ns > 0.0));
-    #[cfg(target_arch = "x86_64")]
-    let wide = std::arch::is_x86_feature_detected!("avx512f");
-    #[cfg(not(target_arch = "x86_64"))]
-    let wide = false;
-    assert_eq!(v["avx512"], wide);
+    assert_eq!(v["simd"], beeswarm::simd::detected().name());
+    let v = json(&beeswarm_with(dir.path(), &args, Some("portable")));
+    assert_eq!(v["simd"], "portable");
+    let v = json(&beeswarm_with(dir.path(), &args, Some("native")));
+    assert_eq!(v["simd"], beeswarm::simd::detected().name());
+    let run = beeswarm_with(dir.path(), &args, Some("avx512f"));
+    assert_eq!(run.code, 2);
+    assert_says(
+        &run.stderr,
+        &[
+            "BEESWARM_SIMD is \"avx512f\"",
+            "expected portable, avx2 or native",
+        ],
+    );
+    assert!(run.stdout.is_empty(), "{}", run.stdout);
 }
 
 #[test]

@@ -6,7 +6,9 @@
 //! meeting a predator, and paper 004's butterflies chasing each other in the rain. A mesh
 //! obstacle among the bees covers the mesh queries' per-thread memo and search bounds,
 //! which must not change an answer. The nest is a hive that a fifth of the bees start
-//! inside (hive traffic: bees out of the neighbour grid, coming out and going in).
+//! inside (hive traffic: bees out of the neighbour grid, coming out and going in). The
+//! same shots give the same bytes with the wide (SIMD) paths capped at every level the CPU
+//! has (`beeswarm::simd`), so on every x86-64 machine.
 
 mod common;
 
@@ -122,10 +124,21 @@ fn bake(dir: &Path, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)>
 }
 
 fn bake_shot(dir: &Path, src: &str, threads: usize, seed: Option<u64>) -> Vec<(String, Vec<u8>)> {
+    bake_at(dir, src, threads, seed, "native")
+}
+
+/// Bakes `src` with the wide paths capped at `simd` (`BEESWARM_SIMD`).
+fn bake_at(
+    dir: &Path,
+    src: &str,
+    threads: usize,
+    seed: Option<u64>,
+    simd: &str,
+) -> Vec<(String, Vec<u8>)> {
     let shot = dir.join("det.toml");
     std::fs::write(&shot, src).unwrap();
     std::fs::write(dir.join("ball.obj"), ball_obj()).unwrap();
-    let out = dir.join(format!("t{threads}-{}", seed.unwrap_or(0)));
+    let out = dir.join(format!("t{threads}-{}-{simd}", seed.unwrap_or(0)));
     let threads = threads.to_string();
     let mut args = vec![
         shot.to_str().unwrap(),
@@ -144,7 +157,7 @@ fn bake_shot(dir: &Path, src: &str, threads: usize, seed: Option<u64>) -> Vec<(S
     if let Some(s) = &seed {
         args.extend(["--seed", s]);
     }
-    common::bake_ok(args);
+    common::bake_ok_with(args, &[(beeswarm::simd::ENV, simd)]);
     let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| {
@@ -174,19 +187,50 @@ fn caches_around_a_moving_mesh_are_byte_identical_with_1_and_4_threads() {
     );
 }
 
-fn identical(one: Vec<(String, Vec<u8>)>, four: Vec<(String, Vec<u8>)>) {
-    assert!(!one.is_empty());
+/// The wide paths (`beeswarm::simd`: the grid's scan and ranking, the bee's pair and
+/// density sums, the curl noise, fastswarm's batches) do the portable code's operations in
+/// its order, so a cache is the same bytes on a CPU without them: baked on every level
+/// this CPU has, against the portable code.
+#[test]
+fn caches_are_byte_identical_on_every_simd_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let levels: &[(&str, beeswarm::simd::Level)] = &[
+        ("avx2", beeswarm::simd::Level::Avx2),
+        ("native", beeswarm::simd::Level::Avx512),
+    ];
+    let cpu = beeswarm::simd::detected();
+    if cpu == beeswarm::simd::Level::Portable {
+        eprintln!("this CPU has neither AVX2 nor AVX-512: no wide path to compare");
+        return;
+    }
+    for src in [SHOT, MOVING_SHOT] {
+        let portable = bake_at(dir.path(), src, 2, None, "portable");
+        for &(cap, level) in levels {
+            if level > cpu {
+                eprintln!(
+                    "this CPU lacks {}: that level is not compared",
+                    level.name()
+                );
+                continue;
+            }
+            identical(portable.clone(), bake_at(dir.path(), src, 2, None, cap));
+        }
+    }
+}
+
+fn identical(first: Vec<(String, Vec<u8>)>, second: Vec<(String, Vec<u8>)>) {
+    assert!(!first.is_empty());
     assert_eq!(
-        one.iter().map(|f| &f.0).collect::<Vec<_>>(),
-        four.iter().map(|f| &f.0).collect::<Vec<_>>()
+        first.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        second.iter().map(|f| &f.0).collect::<Vec<_>>()
     );
-    for ((name, a), (_, b)) in one.iter().zip(&four) {
+    for ((name, a), (_, b)) in first.iter().zip(&second) {
         // The set's manifest is small; it must be identical too (hashes, no time stamp).
         assert!(
             a.len() > 1000 || name.ends_with(".beeswarm.json"),
             "{name} is too small to mean anything"
         );
-        assert!(a == b, "{name} differs between 1 and 4 threads");
+        assert!(a == b, "{name} differs between the two bakes");
     }
 }
 

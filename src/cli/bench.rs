@@ -179,11 +179,10 @@ pub fn run(a: BenchArgs) -> Result<()> {
             "bee_steps_per_s": (steps / seconds).round(),
             "bee_frames_per_s": ((a.bees * a.frames) as f64 / seconds).round(),
             "peak_rss_mb": rss,
-            // Whether the sixteen-lane paths ran (the neighbour search, the pair sums,
-            // the curl noise): without them a sparse bee-step took 18 % longer here
-            // (docs/model.md), so figures from CPUs with and without AVX-512 do not
-            // compare.
-            "avx512": crate::geometry::grid::wide_collect(),
+            // Which wide paths ran (`crate::simd`; capped by BEESWARM_SIMD): without the
+            // sixteen-lane ones a sparse bee-step took 18 % longer here (docs/model.md),
+            // so figures from different levels do not compare.
+            "simd": crate::simd::level().name(),
         })
     ));
     Ok(())

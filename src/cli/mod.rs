@@ -45,6 +45,10 @@ pub fn main() -> i32 {
             return code;
         }
     };
+    // A misspelt cap on the wide paths is an error, not silently the default.
+    if let Err(e) = crate::simd::check_env() {
+        return report(&Error::input(e));
+    }
     let result = match cli.command {
         Command::Bake(a) => bake::run(a),
         Command::Check(a) => check::run(a),

@@ -47,10 +47,10 @@ const SAFE: f32 = 1_073_741_824.0;
 
 impl CurlNoise {
     /// `out[k] = self.force(pos(k))` for every k, bit for bit: sixteen at a time with
-    /// AVX-512 where the CPU has it, one at a time elsewhere.
+    /// AVX-512 where it runs (`crate::simd`), one at a time elsewhere.
     pub fn forces(&self, pos: impl Fn(usize) -> Vec3, out: &mut [Vec3]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if crate::simd::avx512() {
             let tables = self.hash_tables();
             for (c, chunk) in out.chunks_mut(WIDTH).enumerate() {
                 // In lattice units, as `force`. Lanes past the end repeat the chunk's first

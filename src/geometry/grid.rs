@@ -510,7 +510,7 @@ impl Grid {
         out: &mut [u32],
         found: &mut Found,
     ) -> usize {
-        self.nearest_scanning(p, radius, k, skip, out, wide_collect(), found)
+        self.nearest_scanning(p, radius, k, skip, out, crate::simd::avx512(), found)
     }
 
     /// [`Grid::nearest`], runs scanned and candidates ranked with AVX-512 if `wide` (only
@@ -782,7 +782,7 @@ impl Grid {
             let mut runs = Runs::new();
             #[cfg(target_arch = "x86_64")]
             if scan.wide {
-                // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+                // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
                 unsafe { self.near_rows_wide(p, c, r2, ring1, &mut runs) };
             } else {
                 self.near_rows(p, c, r2, ring1, &mut runs);
@@ -1209,22 +1209,6 @@ const PACKED: [[u32; LANES]; 16] = {
 /// Candidates the AVX-512 scan tests together.
 const WIDE_LANES: usize = 16;
 
-/// Whether this CPU takes the AVX-512 scan (`collect_wide`) and ranking
-/// (`ranked_below_wide`): the same candidates in the same order as four lanes at a time,
-/// so the same answers on every machine. The other AVX-512 paths (the pair sums, the curl
-/// noise) check the same feature, and `beeswarm bench` reports it.
-#[inline]
-pub(crate) fn wide_collect() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
 /// Places in the sorted arrays of candidates collected, in the order of the scan: a
 /// query's working buffer, which a caller making many queries keeps
 /// ([`Grid::nearest_with`]). Whatever a query left in it is never read by the next.
@@ -1258,7 +1242,7 @@ struct Scan<'a> {
     skip_slot: u32,
     /// Neighbours wanted (at most `MAX_K`).
     k: usize,
-    /// Runs are scanned, and candidates ranked, with AVX-512 (`wide_collect`).
+    /// Runs are scanned, and candidates ranked, with AVX-512 (`crate::simd::avx512`).
     wide: bool,
     /// On coarse cells: the grid's origin and the fine layout, whose walk order the
     /// candidates are put in before any are kept (`Scan::in_fine_order`).
@@ -1422,7 +1406,7 @@ impl Scan<'_> {
     fn collect_runs(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
         #[cfg(target_arch = "x86_64")]
         if self.wide {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
             return unsafe { self.collect_runs_wide(runs, r2, found) };
         }
         for &(s, e) in runs {
@@ -1508,7 +1492,7 @@ impl Scan<'_> {
             }
         }
         let kept = match n.div_ceil(LANES) {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`wide_collect`).
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
             #[cfg(target_arch = "x86_64")]
             g if self.wide && g <= 2 * LANES => unsafe { ranked_below_wide::<2>(&d2, n, k) },
             #[cfg(target_arch = "x86_64")]
@@ -1653,7 +1637,7 @@ mod tests {
         // Ranked four lanes at a time and, where the CPU has AVX-512, sixteen.
         let mut rng = Rng::new(7, 3, 1);
         for trial in 0..8000 {
-            let wide = trial % 2 == 1 && wide_collect();
+            let wide = trial % 2 == 1 && crate::simd::avx512();
             let trial = trial / 2;
             let n = 2 + trial % (COLLECT - 1);
             let k = [1, 4, 7, 16, 16, 16, 24, 32][trial % 8].min(n - 1);
@@ -1755,7 +1739,7 @@ mod tests {
         // four at a time, in a sparse cloud, a middling one, a crowd (thin cells) and a
         // lattice full of ties, for k from 1 to 32 (a full buffer of candidates kept at
         // other points).
-        if !wide_collect() {
+        if !crate::simd::avx512() {
             eprintln!("skipped: this CPU has no AVX-512");
             return;
         }
@@ -1922,7 +1906,7 @@ mod tests {
             for (i, n) in queries.flat_map(|i| (0..12).map(move |n| (i, n))) {
                 let p = pts[i];
                 let reach = cell * (0.1 + 0.2 * n as f32);
-                for wide in [false, wide_collect()] {
+                for wide in [false, crate::simd::avx512()] {
                     let scan = Scan {
                         xs: &g.xs,
                         ys: &g.ys,
@@ -1995,7 +1979,7 @@ mod tests {
             assert_eq!(coarse.cell(), fine.cell());
             let mut kept = Found::default();
             for wide in [false, true] {
-                if wide && !wide_collect() {
+                if wide && !crate::simd::avx512() {
                     continue;
                 }
                 for k in [2, 5, 16] {

@@ -65,7 +65,16 @@ pub fn assert_all_finite(sim: &Simulation) {
 /// Runs `beeswarm bake` with `args`, failing the test with its error output unless it
 /// succeeds.
 pub fn bake_ok<S: AsRef<std::ffi::OsStr>>(args: impl IntoIterator<Item = S>) {
+    bake_ok_with(args, &[]);
+}
+
+/// [`bake_ok`] with the environment variables `env` set.
+pub fn bake_ok_with<S: AsRef<std::ffi::OsStr>>(
+    args: impl IntoIterator<Item = S>,
+    env: &[(&str, &str)],
+) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_beeswarm"))
+        .envs(env.iter().copied())
         .arg("bake")
         .args(args)
         .output()

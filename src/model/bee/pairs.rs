@@ -31,13 +31,13 @@ pub(super) struct Bee<'a> {
 }
 
 /// The sums over `list` (indices into `agents`) of the pressure terms and the contact
-/// springs, as the step's loop adds them; `None` where the CPU lacks AVX-512, the list is
+/// springs, as the step's loop adds them; `None` where the AVX-512 paths do not run (`crate::simd`), the list is
 /// shorter than `WIDE_FROM`, or a neighbour within reach coincides with the bee (the
 /// loop's fallback direction then separates them).
 #[inline]
 pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= WIDE_FROM && std::arch::is_x86_feature_detected!("avx512f") {
+    if list.len() >= WIDE_FROM && crate::simd::avx512() {
         // SAFETY: the CPU has AVX-512 F (checked above).
         return unsafe { sums16(agents, list, bee) };
     }
@@ -252,8 +252,8 @@ unsafe fn records16(
 
 /// Eq. 10's density sum over `list` for the bee whose record is `me`, starting from `own`
 /// (its own term), as the gather pass adds it one neighbour at a time
-/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the CPU
-/// lacks AVX-512 or the list is short.
+/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the AVX-512
+/// paths do not run (`crate::simd`) or the list is short.
 #[inline]
 pub(super) fn density_sum(
     k: &Kernels,
@@ -263,7 +263,7 @@ pub(super) fn density_sum(
     own: f32,
 ) -> Option<f32> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= WIDE_FROM && std::arch::is_x86_feature_detected!("avx512f") {
+    if list.len() >= WIDE_FROM && crate::simd::avx512() {
         // SAFETY: the CPU has AVX-512 F (checked above).
         return unsafe { density16(k, agents, list, me, own) };
     }
@@ -450,13 +450,6 @@ mod tests {
     }
 
     fn wide_cpu() -> bool {
-        #[cfg(target_arch = "x86_64")]
-        {
-            std::arch::is_x86_feature_detected!("avx512f")
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            false
-        }
+        crate::simd::avx512()
     }
 }

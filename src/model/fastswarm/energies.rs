@@ -158,15 +158,13 @@ impl Attraction {
     #[inline]
     pub fn gather(&mut self, cells: &CellIndex, exclude: usize, zone: Zone, nearest: &mut Nearest) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
-            // SAFETY: the CPU has AVX-512 F and VL, checked just above.
+        if crate::simd::avx512() {
+            // SAFETY: the CPU has AVX-512 F and VL and AVX2 (`simd::avx512`).
             return unsafe { self.gather_avx512(cells, exclude, zone, nearest) };
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (`simd::avx2`).
             return unsafe { self.gather_avx2(cells, exclude, zone, nearest) };
         }
         self.gather_batches::<false, false, 8>(cells, exclude, zone, nearest);

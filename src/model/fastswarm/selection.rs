@@ -39,15 +39,13 @@ pub fn select(
     allowed: impl Fn(Vec3) -> bool,
 ) -> Option<Choice> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-    {
-        // SAFETY: the CPU has AVX-512 F and VL, checked just above.
+    if crate::simd::avx512() {
+        // SAFETY: the CPU has AVX-512 F and VL and AVX2 (`simd::avx512`).
         return unsafe { select_avx512(e, db, range, free_angle, allowed) };
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
+    if crate::simd::avx2() {
+        // SAFETY: the CPU has AVX2 (`simd::avx2`).
         return unsafe { select_avx2(e, db, range, free_angle, allowed) };
     }
     select_in_batches(e, db, range, free_angle, allowed)
