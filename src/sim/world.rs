@@ -848,7 +848,14 @@ impl Simulation {
     /// bee's: the attitude a substep earlier, three sines and cosines, and the turn
     /// between them). Off, `SwarmFrame::angular_velocity_deg` holds zeros.
     pub fn record_spin(&mut self, on: bool) {
-        self.spin = on;
+        // The current frame's record follows at once (it was made when the world was
+        // built), unless it has been handed over.
+        if on != self.spin {
+            self.spin = on;
+            if !self.record_handed {
+                self.update_record();
+            }
+        }
     }
 
     /// The state at the current frame, one entry per swarm.
@@ -1595,9 +1602,12 @@ mod tests {
             let name = kind.info().name;
             let (mut with, mut without) = (sim(name, 200), sim(name, 200));
             without.record_spin(false);
-            for _ in 0..3 {
-                with.advance();
-                without.advance();
+            for frame in 0..4 {
+                // The first frame's record too (made before spin was turned off).
+                if frame > 0 {
+                    with.advance();
+                    without.advance();
+                }
                 let (a, b) = (&with.record()[0], &without.record()[0]);
                 assert_eq!(a.ids, b.ids, "{name}");
                 assert_eq!(bits(a), bits(b), "{name}");
