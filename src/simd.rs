@@ -10,7 +10,7 @@
 //! once, at the first check; the binary checks its value at start-up ([`check_env`]), so a
 //! misspelt value is an error there rather than silently the default.
 
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// The environment variable that caps the level.
 pub const ENV: &str = "BEESWARM_SIMD";
@@ -19,11 +19,11 @@ pub const ENV: &str = "BEESWARM_SIMD";
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Level {
     /// The portable code: SSE4.2-era x86-64 (the build's baseline) or any other target.
-    Portable,
+    Portable = 0,
     /// AVX2: fastswarm's eight-lane batches.
-    Avx2,
+    Avx2 = 1,
     /// AVX-512 F and VL (with AVX2): every wide path.
-    Avx512,
+    Avx512 = 2,
 }
 
 impl Level {
@@ -40,14 +40,32 @@ impl Level {
 /// The level the wide paths take: the CPU's, capped by `BEESWARM_SIMD`.
 #[inline]
 pub fn level() -> Level {
-    static LEVEL: OnceLock<Level> = OnceLock::new();
-    *LEVEL.get_or_init(|| {
-        let cap = std::env::var(ENV)
-            .ok()
-            .and_then(|v| parse(&v).ok())
-            .unwrap_or(Level::Avx512);
-        detected().min(cap)
-    })
+    // A relaxed load and a compare, as `is_x86_feature_detected!` costs: the search and
+    // the pair sums ask once per agent and substep. (A `OnceLock` cost 19 instructions
+    // per bee-step more under callgrind.) Threads racing to the first check work out the
+    // same value.
+    match LEVEL.load(Ordering::Relaxed) {
+        0 => Level::Portable,
+        1 => Level::Avx2,
+        2 => Level::Avx512,
+        _ => first_check(),
+    }
+}
+
+/// The level as 0, 1 or 2, or `UNKNOWN` before the first check.
+static LEVEL: AtomicU8 = AtomicU8::new(UNKNOWN);
+const UNKNOWN: u8 = u8::MAX;
+
+#[cold]
+#[inline(never)]
+fn first_check() -> Level {
+    let cap = std::env::var(ENV)
+        .ok()
+        .and_then(|v| parse(&v).ok())
+        .unwrap_or(Level::Avx512);
+    let level = detected().min(cap);
+    LEVEL.store(level as u8, Ordering::Relaxed);
+    level
 }
 
 /// Whether the AVX-512 paths run (the CPU has AVX-512 F, VL and AVX2, and no cap below).
