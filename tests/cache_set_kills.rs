@@ -71,11 +71,7 @@ fn command(dir: &Path, seed: u64, formats: &str) -> Command {
 /// A whole bake; its set must be exactly what the folder holds.
 fn bake_and_check(dir: &Path, seed: u64, formats: &str) -> Manifest {
     let out = command(dir, seed, formats).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     let folder = dir.join("out");
     assert_eq!(
         temporaries(&folder),

@@ -32,7 +32,7 @@ fn check_csv(dir: &Path) -> String {
         .args(["check", "shot.toml", "--out", "out", "--format", "csv"])
         .output()
         .unwrap();
-    assert!(out.status.success());
+    common::assert_succeeded(&out);
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -254,7 +254,7 @@ fn a_second_bake_of_the_same_shot_into_the_same_folder_is_refused_while_the_firs
         .args(["--progress", "none"])
         .output()
         .unwrap();
-    assert!(other.status.success());
+    common::assert_succeeded(&other);
     drop(held);
     assert!(!cache_set::lock_path(&out, "hive").exists());
     baked(dir.path(), &["--format", "csv", "--seed", "9"]);

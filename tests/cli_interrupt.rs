@@ -2,6 +2,8 @@
 //! previous cache as it was with nothing of the interrupted bake behind.
 #![cfg(unix)]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
@@ -159,11 +161,7 @@ fn many_swarms_bake_under_a_small_open_file_limit() {
         .current_dir(p)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     let usda = std::fs::read_to_string(p.join("out/many.usda")).unwrap();
     assert_eq!(usda.matches("point3f[] positions.timeSamples").count(), 150);
     // Nine sampled attributes a swarm: positions, orientations, velocities, angular

@@ -2,6 +2,8 @@
 //! (`examples/paper003_*.toml`) baked in memory. The numbers are printed
 //! (`cargo test --release --test paper003 -- --nocapture`) and recorded in docs/model.md.
 
+mod common;
+
 use beeswarm::model::fastswarm::database::Database;
 use beeswarm::model::fastswarm::selection::is_turned;
 use beeswarm::sim::Simulation;
@@ -285,11 +287,7 @@ fn the_shipped_database_rebuilds_from_the_recording() {
         .args(&args)
         .output()
         .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    common::assert_succeeded(&run);
     assert!(
         std::fs::read_to_string(&db).unwrap() == shipped,
         "the rebuild differs"

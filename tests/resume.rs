@@ -2,6 +2,8 @@
 //! byte-identical to an uninterrupted bake's.
 #![cfg(unix)]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -137,11 +139,7 @@ fn a_killed_bake_resumes_into_byte_identical_caches() {
     let p = dir.path();
     std::fs::write(p.join("shot.toml"), SHOT).unwrap();
     let out = bake(p, &["--out", "whole", "--quiet"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     let expected = files(&p.join("whole"));
     assert_eq!(
         expected,
@@ -199,7 +197,7 @@ fn a_checkpoint_of_another_seed_is_ignored() {
             "--out", "whole", "--seed", "9", "--format", "csv", "--quiet",
         ],
     );
-    assert!(out.status.success());
+    common::assert_succeeded(&out);
     bake_and_kill_after(p, "parts", 6, &["--format", "csv"]);
     let out = bake(
         p,

@@ -44,7 +44,7 @@ fn check_reports_density_and_warns_when_agents_start_crowded() {
             .current_dir(dir.path())
             .output()
             .unwrap();
-        assert!(out.status.success());
+        common::assert_succeeded(&out);
         String::from_utf8(out.stdout).unwrap()
     };
     let roomy = check("[[swarm]]\ncount = 100000\n");

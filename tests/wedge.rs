@@ -1,6 +1,8 @@
 //! `beeswarm wedge`: variant shots checked up front, an OpenJD job, the local runner and
 //! the contact sheet.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -46,11 +48,7 @@ fn writes_checked_variants_and_a_job() {
             "w",
         ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     let v3 = std::fs::read_to_string(p.join("w/variants/small_3.toml")).unwrap();
     // Variant 3 = seed 2, speed 0.8 (the first key varies slowest); comments survive.
     assert!(v3.starts_with("# A small shot to wedge.\n"), "{v3}");
@@ -169,11 +167,7 @@ fn run_bakes_every_variant_like_a_plain_bake_and_gathers_a_contact_sheet() {
             "--run",
         ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     for k in 1..=3 {
         let csv = p.join(format!("w/caches/small_{k}/small_{k}.tracks.csv"));
         assert!(csv.exists(), "{}", csv.display());
@@ -191,7 +185,7 @@ fn run_bakes_every_variant_like_a_plain_bake_and_gathers_a_contact_sheet() {
             "--quiet",
         ],
     );
-    assert!(out.status.success());
+    common::assert_succeeded(&out);
     let direct = std::fs::read_to_string(p.join("direct/small.tracks.csv")).unwrap();
     let wedged = std::fs::read_to_string(p.join("w/caches/small_3/small_3.tracks.csv")).unwrap();
     assert_eq!(direct, wedged.replace("small_3", "small"));
@@ -205,7 +199,7 @@ fn run_bakes_every_variant_like_a_plain_bake_and_gathers_a_contact_sheet() {
     // Gathering again gives the same bytes.
     let before = std::fs::read(p.join("w/small.contact.png")).unwrap();
     let out = beeswarm(p, &["gather", "w"]);
-    assert!(out.status.success());
+    common::assert_succeeded(&out);
     assert_eq!(
         before,
         std::fs::read(p.join("w/small.contact.png")).unwrap()
@@ -233,7 +227,7 @@ fn with_a_reference_the_gather_step_ranks_the_variants() {
             "--quiet",
         ],
     );
-    assert!(out.status.success());
+    common::assert_succeeded(&out);
     let out = beeswarm(
         p,
         &[
@@ -249,11 +243,7 @@ fn with_a_reference_the_gather_step_ranks_the_variants() {
             "--quiet",
         ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out);
     let v1 = std::fs::read_to_string(p.join("w/variants/small_1.toml")).unwrap();
     assert!(v1.contains("formats = [\"glb\", \"csv\"]"), "{v1}");
     assert!(p.join("w/reference.csv").exists());
@@ -280,11 +270,7 @@ fn a_wedge_rewritten_with_fewer_variants_removes_the_others_and_their_caches() {
     std::fs::write(p.join("small.toml"), SHOT).unwrap();
     let wedge = |seeds: &str| {
         let out = beeswarm(p, &["wedge", "small.toml", "--vary", seeds, "--out", "w"]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_succeeded(&out);
     };
     wedge("seed=1..4");
     // Variant 4 baked (a stand-in cache), and a file of the user's beside the caches.

@@ -79,6 +79,11 @@ pub fn bake_ok_with<S: AsRef<std::ffi::OsStr>>(
         .args(args)
         .output()
         .unwrap();
+    assert_succeeded(&out);
+}
+
+/// Fails the test with the command's error output unless it exited with success.
+pub fn assert_succeeded(out: &std::process::Output) {
     assert!(
         out.status.success(),
         "{}",
