@@ -782,7 +782,7 @@ impl Grid {
             let mut runs = Runs::new();
             #[cfg(target_arch = "x86_64")]
             if scan.wide {
-                // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
+                // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
                 unsafe { self.near_rows_wide(p, c, r2, ring1, &mut runs) };
             } else {
                 self.near_rows(p, c, r2, ring1, &mut runs);
@@ -1406,7 +1406,7 @@ impl Scan<'_> {
     fn collect_runs(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
         #[cfg(target_arch = "x86_64")]
         if self.wide {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
             return unsafe { self.collect_runs_wide(runs, r2, found) };
         }
         for &(s, e) in runs {
@@ -1492,7 +1492,7 @@ impl Scan<'_> {
             }
         }
         let kept = match n.div_ceil(LANES) {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`crate::simd::avx512`).
+            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
             #[cfg(target_arch = "x86_64")]
             g if self.wide && g <= 2 * LANES => unsafe { ranked_below_wide::<2>(&d2, n, k) },
             #[cfg(target_arch = "x86_64")]
@@ -1740,7 +1740,7 @@ mod tests {
         // lattice full of ties, for k from 1 to 32 (a full buffer of candidates kept at
         // other points).
         if !crate::simd::avx512() {
-            eprintln!("skipped: this CPU has no AVX-512");
+            eprintln!("skipped: the AVX-512 paths do not run here (`simd::avx512`)");
             return;
         }
         let lattice: Vec<Vec3> = (0..4096)

@@ -31,9 +31,9 @@ pub(super) struct Bee<'a> {
 }
 
 /// The sums over `list` (indices into `agents`) of the pressure terms and the contact
-/// springs, as the step's loop adds them; `None` where the AVX-512 paths do not run (`crate::simd`), the list is
-/// shorter than `WIDE_FROM`, or a neighbour within reach coincides with the bee (the
-/// loop's fallback direction then separates them).
+/// springs, as the step's loop adds them; `None` where the AVX-512 paths do not run
+/// (`crate::simd`), the list is shorter than `WIDE_FROM`, or a neighbour within reach
+/// coincides with the bee (the loop's fallback direction then separates them).
 #[inline]
 pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     #[cfg(target_arch = "x86_64")]
@@ -252,8 +252,8 @@ unsafe fn records16(
 
 /// Eq. 10's density sum over `list` for the bee whose record is `me`, starting from `own`
 /// (its own term), as the gather pass adds it one neighbour at a time
-/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the AVX-512
-/// paths do not run (`crate::simd`) or the list is short.
+/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the
+/// AVX-512 paths do not run (`crate::simd`) or the list is short.
 #[inline]
 pub(super) fn density_sum(
     k: &Kernels,
