@@ -404,11 +404,14 @@ mod tests {
                     );
                     wide += 1;
                 }
-                None => assert!(coincident || list.len() < WIDE_FROM || !wide_cpu()),
+                None => assert!(coincident || list.len() < WIDE_FROM || !crate::simd::avx512()),
             }
         }
         // Where the CPU has AVX-512, most cases went through the lanes.
-        assert!(!wide_cpu() || wide > 1500, "{wide} cases through the lanes");
+        assert!(
+            !crate::simd::avx512() || wide > 1500,
+            "{wide} cases through the lanes"
+        );
     }
 
     #[test]
@@ -443,13 +446,12 @@ mod tests {
                     assert_eq!(got.to_bits(), want.to_bits(), "case {case}");
                     wide += 1;
                 }
-                None => assert!(list.len() < WIDE_FROM || !wide_cpu()),
+                None => assert!(list.len() < WIDE_FROM || !crate::simd::avx512()),
             }
         }
-        assert!(!wide_cpu() || wide > 1500, "{wide} cases through the lanes");
-    }
-
-    fn wide_cpu() -> bool {
-        crate::simd::avx512()
+        assert!(
+            !crate::simd::avx512() || wide > 1500,
+            "{wide} cases through the lanes"
+        );
     }
 }
