@@ -1,5 +1,5 @@
 //! The curl-noise force (Eq. 8–9) at every agent of a swarm for one substep, worked out
-//! together before the step pass: sixteen agents at a time with AVX-512
+//! together before the step pass: sixteen agents at a time with AVX-512, eight with AVX2
 //! ([`CurlNoise::forces`]), where a step asking for its own agent's force one at a time
 //! cost about 14 % of a bee-step. Every force is bit-identical to [`CurlNoise::force`]'s,
 //! so the caches are the same as when each step worked out its own.
@@ -10,7 +10,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Agents per piece of the parallel pass (a multiple of the sixteen lanes).
+/// Agents per piece of the parallel pass (a multiple of the sixteen or eight lanes).
 const PIECE: usize = 128;
 
 /// The forces at the agents' positions at the start of one substep.
