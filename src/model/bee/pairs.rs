@@ -1,11 +1,12 @@
-//! A bee's sums over its listed neighbours, sixteen neighbours at a time with AVX-512:
-//! Eq. 10's density (the gather pass) and Eq. 11's pressure push with Sec. VII's contact
-//! spring (the step). Each lane does exactly the arithmetic of
+//! A bee's sums over its listed neighbours, many neighbours at a time: Eq. 10's density
+//! (the gather pass) and Eq. 11's pressure push with Sec. VII's contact spring (the step).
+//! Sixteen lanes with AVX-512 for a long list (its records gathered), eight with AVX2 for
+//! a short one, or any list where AVX-512 does not run (its records loaded whole and
+//! transposed). Each lane does exactly the arithmetic of
 //! [`super::repulsion::density_term`], [`super::repulsion::pressure_term`] and
 //! [`crate::model::collision`]'s spring for its neighbour (no fused multiply-add), and
 //! the terms are then added in the list's order, so the sums are the same bits as the
-//! one-at-a-time loops. A list holds at most sixteen, so one group of lanes takes a whole
-//! list; its square roots and divisions become one instruction each.
+//! one-at-a-time loops. Its square roots and divisions become one instruction per group.
 
 use super::kernels::Kernels;
 use crate::model::context::{MAX_NEIGHBOURS, Neighbour};
@@ -14,6 +15,9 @@ use glam::Vec3;
 /// Lists at least this long take the sixteen lanes: for shorter ones (a sparse swarm's
 /// seven or so) gathering the neighbours' fields into lanes costs more than the loop.
 const WIDE_FROM: usize = 8;
+
+/// Lists at least this long take the eight lanes (where the sixteen do not).
+const NARROW_FROM: usize = 6;
 
 /// What the pair terms of one bee need besides its neighbours.
 pub(super) struct Bee<'a> {
@@ -31,15 +35,23 @@ pub(super) struct Bee<'a> {
 }
 
 /// The sums over `list` (indices into `agents`) of the pressure terms and the contact
-/// springs, as the step's loop adds them; `None` where the AVX-512 paths do not run
-/// (`crate::simd`), the list is shorter than `WIDE_FROM`, or a neighbour within reach
-/// coincides with the bee (the loop's fallback direction then separates them).
+/// springs, as the step's loop adds them; `None` where no wide path runs (`crate::simd`),
+/// the list is shorter than `NARROW_FROM`, or a neighbour within reach coincides with the
+/// bee (the loop's fallback direction then separates them).
 #[inline]
 pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= WIDE_FROM && crate::simd::avx512() {
-        // SAFETY: the CPU has AVX-512 F (checked above).
-        return unsafe { sums16(agents, list, bee) };
+    if list.len() >= NARROW_FROM {
+        use crate::simd::Level;
+        match crate::simd::level() {
+            // SAFETY: the CPU has AVX-512 F (checked by the level).
+            Level::Avx512 if list.len() >= WIDE_FROM => {
+                return unsafe { sums16(agents, list, bee) };
+            }
+            // SAFETY: the CPU has AVX2 (either level).
+            Level::Avx512 | Level::Avx2 => return unsafe { sums8(agents, list, bee) },
+            Level::Portable => {}
+        }
     }
     let _ = (agents, list, bee);
     None
@@ -252,8 +264,8 @@ unsafe fn records16(
 
 /// Eq. 10's density sum over `list` for the bee whose record is `me`, starting from `own`
 /// (its own term), as the gather pass adds it one neighbour at a time
-/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where the
-/// AVX-512 paths do not run (`crate::simd`) or the list is short.
+/// (`BeeModel::gather_term`, with the bee's body radius `me.radius`); `None` where no wide
+/// path runs (`crate::simd`) or the list is short.
 #[inline]
 pub(super) fn density_sum(
     k: &Kernels,
@@ -263,9 +275,17 @@ pub(super) fn density_sum(
     own: f32,
 ) -> Option<f32> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= WIDE_FROM && crate::simd::avx512() {
-        // SAFETY: the CPU has AVX-512 F (checked above).
-        return unsafe { density16(k, agents, list, me, own) };
+    if list.len() >= NARROW_FROM {
+        use crate::simd::Level;
+        match crate::simd::level() {
+            // SAFETY: the CPU has AVX-512 F (checked by the level).
+            Level::Avx512 if list.len() >= WIDE_FROM => {
+                return unsafe { density16(k, agents, list, me, own) };
+            }
+            // SAFETY: the CPU has AVX2 (either level).
+            Level::Avx512 | Level::Avx2 => return unsafe { density8(k, agents, list, me, own) },
+            Level::Portable => {}
+        }
     }
     let _ = (k, agents, list, me, own);
     None
@@ -327,6 +347,235 @@ unsafe fn density16(
     Some(sum)
 }
 
+/// Up to eight of `list`'s records (from place `from`), field by field in the lanes of
+/// ten vectors (f32 `k` of each record in vector `k`; lanes past the list are a zero
+/// record), and the bits of the lanes that hold one. Each record is one load of its first
+/// eight f32s and one of its last two, put in lanes by a transpose. `None` if an index
+/// lies outside `agents`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn records8(
+    agents: &[Neighbour],
+    list: &[u32],
+    from: usize,
+    tail: bool,
+) -> Option<(u32, [std::arch::x86_64::__m256; 10])> {
+    use std::arch::x86_64::*;
+    const _: () = assert!(size_of::<Neighbour>() == 40);
+    let zero = Neighbour::default();
+    let n = list.len().saturating_sub(from).min(8);
+    let mut recs = [&zero; 8];
+    for (r, &j) in recs.iter_mut().zip(&list[from..from + n]) {
+        *r = agents.get(j as usize)?;
+    }
+    // SAFETY: each record holds ten f32s: eight from its start, two from its ninth.
+    let head = |r: &Neighbour| unsafe { _mm256_loadu_ps((r as *const Neighbour).cast()) };
+    let (t0, t1, t2, t3, t4, t5, t6, t7) = (
+        _mm256_unpacklo_ps(head(recs[0]), head(recs[1])),
+        _mm256_unpackhi_ps(head(recs[0]), head(recs[1])),
+        _mm256_unpacklo_ps(head(recs[2]), head(recs[3])),
+        _mm256_unpackhi_ps(head(recs[2]), head(recs[3])),
+        _mm256_unpacklo_ps(head(recs[4]), head(recs[5])),
+        _mm256_unpackhi_ps(head(recs[4]), head(recs[5])),
+        _mm256_unpacklo_ps(head(recs[6]), head(recs[7])),
+        _mm256_unpackhi_ps(head(recs[6]), head(recs[7])),
+    );
+    let (s0, s1, s2, s3) = (
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    );
+    let (s4, s5, s6, s7) = (
+        _mm256_shuffle_ps::<0x44>(t4, t6),
+        _mm256_shuffle_ps::<0xEE>(t4, t6),
+        _mm256_shuffle_ps::<0x44>(t5, t7),
+        _mm256_shuffle_ps::<0xEE>(t5, t7),
+    );
+    let mut f = [_mm256_setzero_ps(); 10];
+    f[0] = _mm256_permute2f128_ps::<0x20>(s0, s4);
+    f[1] = _mm256_permute2f128_ps::<0x20>(s1, s5);
+    f[2] = _mm256_permute2f128_ps::<0x20>(s2, s6);
+    f[3] = _mm256_permute2f128_ps::<0x20>(s3, s7);
+    f[4] = _mm256_permute2f128_ps::<0x31>(s0, s4);
+    f[5] = _mm256_permute2f128_ps::<0x31>(s1, s5);
+    f[6] = _mm256_permute2f128_ps::<0x31>(s2, s6);
+    f[7] = _mm256_permute2f128_ps::<0x31>(s3, s7);
+    if tail {
+        // SAFETY: f32s 8 and 9 of a record, 8 bytes from byte 32 of its 40.
+        let last = |r: &Neighbour| unsafe {
+            _mm_castpd_ps(_mm_load_sd((r as *const Neighbour).cast::<f64>().add(4)))
+        };
+        let half = |a: usize| {
+            let lo = _mm_unpacklo_ps(last(recs[a]), last(recs[a + 1]));
+            let hi = _mm_unpacklo_ps(last(recs[a + 2]), last(recs[a + 3]));
+            (_mm_movelh_ps(lo, hi), _mm_movehl_ps(hi, lo))
+        };
+        let ((d0, p0), (d1, p1)) = (half(0), half(4));
+        f[8] = _mm256_set_m128(d1, d0);
+        f[9] = _mm256_set_m128(p1, p0);
+    }
+    Some(((1u32 << n) - 1, f))
+}
+
+/// [`sums16`] eight lanes at a time with AVX2 (lists of up to sixteen in two groups, the
+/// terms added in the list's order across them).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sums8(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
+    use std::arch::x86_64::*;
+    let field = |offset: usize| offset / 4;
+    let (pos, vel) = (
+        std::mem::offset_of!(Neighbour, pos),
+        std::mem::offset_of!(Neighbour, vel),
+    );
+    let splat = _mm256_set1_ps;
+    let (add, sub, mul, div) = (
+        |a, b| _mm256_add_ps(a, b),
+        |a, b| _mm256_sub_ps(a, b),
+        |a, b| _mm256_mul_ps(a, b),
+        |a, b| _mm256_div_ps(a, b),
+    );
+    let (lt, gt) = (
+        |a, b| _mm256_cmp_ps::<_CMP_LT_OQ>(a, b),
+        |a, b| _mm256_cmp_ps::<_CMP_GT_OQ>(a, b),
+    );
+    let zero = _mm256_setzero_ps();
+    let k = bee.kernels;
+    let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
+    for from in (0..list.len()).step_by(8) {
+        // SAFETY: the CPU has AVX2 (this function's own target).
+        let (valid, f) = unsafe { records8(agents, list, from, true) }?;
+        let (px, py, pz) = (f[field(pos)], f[field(pos + 4)], f[field(pos + 8)]);
+        let (vx, vy, vz) = (f[field(vel)], f[field(vel + 4)], f[field(vel + 8)]);
+        let radius = f[field(std::mem::offset_of!(Neighbour, radius))];
+        let mass = f[field(std::mem::offset_of!(Neighbour, mass))];
+        let density = f[field(std::mem::offset_of!(Neighbour, density))];
+        let pressure = f[field(std::mem::offset_of!(Neighbour, pressure))];
+        // r = bee − neighbour; `for_each_neighbour`'s squared distance and reach.
+        let (rx, ry, rz) = (
+            sub(splat(bee.pos.x), px),
+            sub(splat(bee.pos.y), py),
+            sub(splat(bee.pos.z), pz),
+        );
+        let d2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
+        let within = _mm256_movemask_ps(lt(d2, splat(bee.reach * bee.reach))) as u32 & valid;
+        let dist = _mm256_sqrt_ps(d2);
+        // Coincident bodies take the loop's fallback direction.
+        if _mm256_movemask_ps(gt(dist, splat(1e-9))) as u32 & within != within {
+            return None;
+        }
+        let (dx, dy, dz) = (div(rx, dist), div(ry, dist), div(rz, dist));
+        let contact = add(splat(bee.radius), radius);
+
+        // Eq. 11 (`repulsion::pressure_term`); a lane's mask is all ones or zero.
+        let s = _mm256_max_ps(sub(dist, contact), zero);
+        let rho_i = splat(bee.density);
+        let rho_j = _mm256_blendv_ps(rho_i, density, gt(density, zero));
+        let p_sum = add(splat(bee.pressure), pressure);
+        let pushes = _mm256_and_ps(
+            _mm256_and_ps(lt(s, splat(k.h)), gt(rho_j, zero)),
+            gt(p_sum, zero),
+        );
+        let pushes = if bee.density > 0.0 { pushes } else { zero };
+        let x = sub(splat(k.h), s);
+        let grad = mul(mul(splat(k.spiky_coef()), x), x);
+        let scale = div(
+            mul(mul(grad, mass), p_sum),
+            mul(mul(splat(2.0), rho_i), rho_j),
+        );
+        // +0.0 where masked, as the AVX-512 path's zeroing multiply.
+        let rep = [dx, dy, dz].map(|d| _mm256_and_ps(pushes, mul(d, scale)));
+
+        // Sec. VII (`collision::spring_accel`).
+        let overlap = sub(contact, dist);
+        let touches = gt(overlap, zero);
+        let (wx, wy, wz) = (
+            sub(splat(bee.vel.x), vx),
+            sub(splat(bee.vel.y), vy),
+            sub(splat(bee.vel.z), vz),
+        );
+        let closing = _mm256_min_ps(add(add(mul(wx, dx), mul(wy, dy)), mul(wz, dz)), zero);
+        let spring = splat(bee.spring);
+        let damping = splat(2.0 * bee.spring.sqrt());
+        let push = sub(mul(spring, overlap), mul(damping, closing));
+        let col = [dx, dy, dz].map(|d| _mm256_and_ps(touches, mul(d, push)));
+
+        // Added in the list's order, every neighbour within reach (a zero term too, as
+        // the loop adds it).
+        let lanes = |v: __m256| {
+            let mut a = [0.0f32; 8];
+            // SAFETY: `a` holds eight f32s.
+            unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) };
+            a
+        };
+        let (rep, col) = (rep.map(lanes), col.map(lanes));
+        let mut left = within;
+        while left != 0 {
+            let l = left.trailing_zeros() as usize;
+            left &= left - 1;
+            a_rep += Vec3::new(rep[0][l], rep[1][l], rep[2][l]);
+            a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
+        }
+    }
+    Some((a_rep, a_col))
+}
+
+/// [`density16`] eight lanes at a time with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn density8(
+    k: &Kernels,
+    agents: &[Neighbour],
+    list: &[u32],
+    me: &Neighbour,
+    own: f32,
+) -> Option<f32> {
+    use std::arch::x86_64::*;
+    let field = |offset: usize| offset / 4;
+    let (pos, radius, mass) = (
+        std::mem::offset_of!(Neighbour, pos),
+        std::mem::offset_of!(Neighbour, radius),
+        std::mem::offset_of!(Neighbour, mass),
+    );
+    let splat = _mm256_set1_ps;
+    let mut sum = own;
+    for from in (0..list.len()).step_by(8) {
+        // Position, body radius and mass are all in a record's first eight f32s.
+        // SAFETY: the CPU has AVX2 (this function's own target).
+        let (valid, f) = unsafe { records8(agents, list, from, false) }?;
+        // `me.pos.distance_squared(o.pos)`: (me − o)², summed x, y, z.
+        let (rx, ry, rz) = (
+            _mm256_sub_ps(splat(me.pos.x), f[field(pos)]),
+            _mm256_sub_ps(splat(me.pos.y), f[field(pos + 4)]),
+            _mm256_sub_ps(splat(me.pos.z), f[field(pos + 8)]),
+        );
+        let d2 = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(rx, rx), _mm256_mul_ps(ry, ry)),
+            _mm256_mul_ps(rz, rz),
+        );
+        // `repulsion::density_term`: m_j W_poly6(max(d − (r_i + r_j), 0)), zero from h on.
+        let contact = _mm256_add_ps(splat(me.radius), f[field(radius)]);
+        let s = _mm256_max_ps(
+            _mm256_sub_ps(_mm256_sqrt_ps(d2), contact),
+            _mm256_setzero_ps(),
+        );
+        let inside = _mm256_cmp_ps::<_CMP_LT_OQ>(s, splat(k.h));
+        let x = _mm256_sub_ps(splat(k.h * k.h), _mm256_mul_ps(s, s));
+        let w = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(splat(k.poly6_coef()), x), x), x);
+        // m_j · 0 where the kernel is zero, as the loop multiplies it.
+        let terms = _mm256_mul_ps(f[field(mass)], _mm256_and_ps(inside, w));
+        let mut lanes = [0.0f32; 8];
+        // SAFETY: `lanes` holds eight f32s.
+        unsafe { _mm256_storeu_ps(lanes.as_mut_ptr(), terms) };
+        // Added in the list's order (a zero term too, as the loop adds it).
+        for t in &lanes[..valid.count_ones() as usize] {
+            sum += t;
+        }
+    }
+    Some(sum)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -376,7 +625,7 @@ mod tests {
             })
             .collect();
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-        let mut wide = 0;
+        let mut wide = [0; 2];
         for case in 0..4000 {
             let n = case % 17;
             let list: Vec<u32> = (0..n).map(|_| (rng.f32() * 400.0) as u32 % 400).collect();
@@ -394,24 +643,47 @@ mod tests {
             let want = one_by_one(&agents, &list, &bee);
             // A list that holds the bee itself coincides with it: the loop's fallback.
             let coincident = list.iter().any(|&j| agents[j as usize].pos == me.pos);
-            match sums(&agents, &list, &bee) {
-                Some(got) => {
-                    assert!(!coincident);
-                    assert_eq!(
-                        (bits(got.0), bits(got.1)),
-                        (bits(want.0), bits(want.1)),
-                        "case {case}"
-                    );
-                    wide += 1;
+            for (path, got) in paths(&agents, &list, &bee) {
+                match got {
+                    Some(got) => {
+                        assert!(!coincident);
+                        assert_eq!(
+                            (bits(got.0), bits(got.1)),
+                            (bits(want.0), bits(want.1)),
+                            "{path}, case {case}"
+                        );
+                        wide[path] += 1;
+                    }
+                    None => assert!(coincident, "{path}, case {case}"),
                 }
-                None => assert!(coincident || list.len() < WIDE_FROM || !crate::simd::avx512()),
+            }
+            if sums(&agents, &list, &bee).is_none() {
+                assert!(coincident || list.len() < NARROW_FROM || !crate::simd::avx2());
             }
         }
-        // Where the CPU has AVX-512, most cases went through the lanes.
+        // Where the CPU has the lanes, most cases went through them.
         assert!(
-            !crate::simd::avx512() || wide > 1500,
-            "{wide} cases through the lanes"
+            !crate::simd::avx2() || wide[0] > 3000,
+            "{wide:?} cases through the lanes"
         );
+        assert!(!crate::simd::avx512() || wide[1] > 3000, "{wide:?}");
+    }
+
+    /// Each wide path the CPU has, by name (0: eight lanes, 1: sixteen), on a whole list.
+    fn paths(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Vec<(usize, Option<(Vec3, Vec3)>)> {
+        let mut out = Vec::new();
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY (both): only where the CPU has the path's instructions.
+            if crate::simd::avx2() {
+                out.push((0, unsafe { sums8(agents, list, bee) }));
+            }
+            if crate::simd::avx512() {
+                out.push((1, unsafe { sums16(agents, list, bee) }));
+            }
+        }
+        let _ = (agents, list, bee);
+        out
     }
 
     #[test]
@@ -428,7 +700,7 @@ mod tests {
                 ..Neighbour::default()
             })
             .collect();
-        let mut wide = 0;
+        let mut wide = [0; 2];
         for case in 0..4000 {
             let list: Vec<u32> = (0..case % 17)
                 .map(|_| (rng.f32() * 300.0) as u32 % 300)
@@ -441,17 +713,27 @@ mod tests {
                 let d = me.pos.distance_squared(o.pos).sqrt();
                 want += repulsion::density_term(&kernels, o.mass, d, me.radius + o.radius);
             }
-            match density_sum(&kernels, &agents, &list, me, own) {
-                Some(got) => {
-                    assert_eq!(got.to_bits(), want.to_bits(), "case {case}");
-                    wide += 1;
+            #[cfg(target_arch = "x86_64")]
+            {
+                let mut got = Vec::new();
+                // SAFETY (both): only where the CPU has the path's instructions.
+                if crate::simd::avx2() {
+                    got.push((0, unsafe { density8(&kernels, &agents, &list, me, own) }));
                 }
-                None => assert!(list.len() < WIDE_FROM || !crate::simd::avx512()),
+                if crate::simd::avx512() {
+                    got.push((1, unsafe { density16(&kernels, &agents, &list, me, own) }));
+                }
+                for (path, sum) in got {
+                    let sum = sum.expect("every index is in the agents");
+                    assert_eq!(sum.to_bits(), want.to_bits(), "{path}, case {case}");
+                    wide[path] += 1;
+                }
+            }
+            if density_sum(&kernels, &agents, &list, me, own).is_none() {
+                assert!(list.len() < NARROW_FROM || !crate::simd::avx2());
             }
         }
-        assert!(
-            !crate::simd::avx512() || wide > 1500,
-            "{wide} cases through the lanes"
-        );
+        assert!(!crate::simd::avx2() || wide[0] == 4000, "{wide:?}");
+        assert!(!crate::simd::avx512() || wide[1] == 4000, "{wide:?}");
     }
 }
