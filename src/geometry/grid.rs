@@ -34,8 +34,43 @@ use std::mem::MaybeUninit;
 const GUESS_MARGIN: f32 = 1.12;
 const RETRY_MARGIN: f32 = 1.3;
 
-/// Candidates tested together.
+/// Candidates tested together by the portable scan.
 const LANES: usize = 4;
+
+/// How many candidates a query's scan tests at a time: the level of the CPU's wide paths
+/// (`crate::simd`). Every width collects the same candidates in the same order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Lanes {
+    /// Four (SSE2 on x86-64, or the target's own vectors).
+    Four,
+    /// Eight with AVX2, their squared distances kept for the ranking.
+    Eight,
+    /// Sixteen with AVX-512, and candidates ranked sixteen at a time.
+    Sixteen,
+}
+
+impl Lanes {
+    /// The widest the wide paths allow here.
+    #[inline]
+    fn of_cpu() -> Self {
+        match crate::simd::level() {
+            crate::simd::Level::Avx512 => Lanes::Sixteen,
+            crate::simd::Level::Avx2 => Lanes::Eight,
+            crate::simd::Level::Portable => Lanes::Four,
+        }
+    }
+
+    /// Every width up to the CPU's, for tests.
+    #[cfg(test)]
+    fn available() -> Vec<Self> {
+        let all = [Lanes::Four, Lanes::Eight, Lanes::Sixteen];
+        let widest = Lanes::of_cpu();
+        all.into_iter()
+            .take_while(|&l| l != widest)
+            .chain([widest])
+            .collect()
+    }
+}
 use rayon::prelude::*;
 
 /// Agents per cell a typical agent sees (bee-weighted mean occupancy) that the cell edge
@@ -510,11 +545,11 @@ impl Grid {
         out: &mut [u32],
         found: &mut Found,
     ) -> usize {
-        self.nearest_scanning(p, radius, k, skip, out, crate::simd::avx512(), found)
+        self.nearest_scanning(p, radius, k, skip, out, Lanes::of_cpu(), found)
     }
 
-    /// [`Grid::nearest`], runs scanned and candidates ranked with AVX-512 if `wide` (only
-    /// where the CPU has it).
+    /// [`Grid::nearest`], runs scanned `lanes` candidates at a time (at most the CPU's
+    /// width, [`Lanes::of_cpu`]).
     #[allow(clippy::too_many_arguments)]
     fn nearest_scanning(
         &self,
@@ -523,7 +558,7 @@ impl Grid {
         k: usize,
         skip: usize,
         out: &mut [u32],
-        wide: bool,
+        lanes: Lanes,
         found: &mut Found,
     ) -> usize {
         let k = k.min(MAX_K).min(out.len());
@@ -537,7 +572,7 @@ impl Grid {
             p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
             skip_slot: self.slot.get(skip).copied().unwrap_or(u32::MAX),
             k,
-            wide,
+            lanes,
             fine: self.coarse.then_some((self.origin, self.fine)),
         };
         found.len = 0;
@@ -781,8 +816,8 @@ impl Grid {
             let ring1 = !beyond(margin, radius, r2);
             let mut runs = Runs::new();
             #[cfg(target_arch = "x86_64")]
-            if scan.wide {
-                // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
+            if scan.wide() {
+                // SAFETY: sixteen lanes only where the CPU has AVX-512 F (`Lanes::of_cpu`).
                 unsafe { self.near_rows_wide(p, c, r2, ring1, &mut runs) };
             } else {
                 self.near_rows(p, c, r2, ring1, &mut runs);
@@ -1209,6 +1244,29 @@ const PACKED: [[u32; LANES]; 16] = {
 /// Candidates the AVX-512 scan tests together.
 const WIDE_LANES: usize = 16;
 
+/// Candidates the AVX2 scan tests together.
+const NARROW_LANES: usize = 8;
+
+/// For each mask of 8 lanes, the lanes set, first to last (the rest 0): the AVX2 scan's
+/// permute, for want of AVX-512's compress.
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+const PACKED8: [[u8; NARROW_LANES]; 256] = {
+    let mut t = [[0; NARROW_LANES]; 256];
+    let mut h = 0;
+    while h < 256 {
+        let (mut lane, mut n) = (0, 0);
+        while lane < NARROW_LANES {
+            if h & (1 << lane) != 0 {
+                t[h][n] = lane as u8;
+                n += 1;
+            }
+            lane += 1;
+        }
+        h += 1;
+    }
+    t
+};
+
 /// Places in the sorted arrays of candidates collected, in the order of the scan: a
 /// query's working buffer, which a caller making many queries keeps
 /// ([`Grid::nearest_with`]). Whatever a query left in it is never read by the next.
@@ -1242,14 +1300,20 @@ struct Scan<'a> {
     skip_slot: u32,
     /// Neighbours wanted (at most `MAX_K`).
     k: usize,
-    /// Runs are scanned, and candidates ranked, with AVX-512 (`crate::simd::avx512`).
-    wide: bool,
+    /// Candidates tested at a time (at most the CPU's width, `Lanes::of_cpu`).
+    lanes: Lanes,
     /// On coarse cells: the grid's origin and the fine layout, whose walk order the
     /// candidates are put in before any are kept (`Scan::in_fine_order`).
     fine: Option<(Vec3, FineCells)>,
 }
 
 impl Scan<'_> {
+    /// Runs are scanned, and candidates ranked, with AVX-512.
+    #[inline(always)]
+    fn wide(&self) -> bool {
+        self.lanes == Lanes::Sixteen
+    }
+
     /// The lanes of the group of four from place `l` whose squared distance `d2` is below
     /// `r2`, other than those past the run's end `b` and the query's own point.
     #[inline(always)]
@@ -1400,18 +1464,103 @@ impl Scan<'_> {
         self.collect_runs(&runs[..n], r2, found);
     }
 
-    /// Collects the runs `(start, end)` in order: with AVX-512 in one call where the CPU
-    /// has it, else four lanes at a time.
+    /// Collects the runs `(start, end)` in order: with AVX-512 or AVX2 in one call where
+    /// the scan is that wide, else four lanes at a time.
     #[inline(always)]
     fn collect_runs(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
         #[cfg(target_arch = "x86_64")]
-        if self.wide {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
-            return unsafe { self.collect_runs_wide(runs, r2, found) };
+        match self.lanes {
+            // SAFETY (both): a width only where the CPU has it (`Lanes::of_cpu`).
+            Lanes::Sixteen => return unsafe { self.collect_runs_wide(runs, r2, found) },
+            Lanes::Eight => return unsafe { self.collect_runs8(runs, r2, found) },
+            Lanes::Four => {}
         }
         for &(s, e) in runs {
             self.collect(s as usize, e as usize, r2, found);
         }
+    }
+
+    /// [`Scan::collect_runs`] with AVX2: every run eight candidates at a time, and their
+    /// squared distances kept for `keep_nearest`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn collect_runs8(&self, runs: &[(u32, u32)], r2: f32, found: &mut Found) {
+        for &(s, e) in runs {
+            self.collect8(s as usize, e as usize, r2, found);
+        }
+    }
+
+    /// [`Scan::collect`] eight candidates at a time with AVX2: the same squared distances
+    /// and comparison, and the hits packed (by a permute from `PACKED8`) into `found` in the
+    /// same order, with their squared distances, as [`Scan::collect_wide`] leaves them.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn collect8(&self, a: usize, b: usize, r2: f32, found: &mut Found) {
+        use std::arch::x86_64::*;
+        assert!(b <= self.xs.len() && b <= self.ys.len() && b <= self.zs.len());
+        let (px, py, pz) = (
+            _mm256_set1_ps(self.p.0.x),
+            _mm256_set1_ps(self.p.1.x),
+            _mm256_set1_ps(self.p.2.x),
+        );
+        let r2 = _mm256_set1_ps(r2);
+        let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        // The count in a local, as in `collect`.
+        let mut len = found.len;
+        let mut l = a;
+        while l < b {
+            if len > COLLECT - NARROW_LANES {
+                found.len = len;
+                self.keep_nearest(found);
+                len = found.len;
+            }
+            let left = (b - l).min(NARROW_LANES);
+            // All ones in the lanes before the run's end.
+            let valid = _mm256_cmpgt_epi32(_mm256_set1_epi32(left as i32), lane);
+            // SAFETY: lanes past the run are masked out of the loads, so only places
+            // below b ≤ the arrays' lengths (asserted above) are read.
+            let (x, y, z) = unsafe {
+                (
+                    _mm256_maskload_ps(self.xs.as_ptr().add(l), valid),
+                    _mm256_maskload_ps(self.ys.as_ptr().add(l), valid),
+                    _mm256_maskload_ps(self.zs.as_ptr().add(l), valid),
+                )
+            };
+            let (dx, dy, dz) = (
+                _mm256_sub_ps(x, px),
+                _mm256_sub_ps(y, py),
+                _mm256_sub_ps(z, pz),
+            );
+            let d2 = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                _mm256_mul_ps(dz, dz),
+            );
+            let near = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(d2, r2)) as u32;
+            let mut hits = near & ((1u32 << left) - 1);
+            let own = self.skip_slot.wrapping_sub(l as u32);
+            hits &= !(((own < NARROW_LANES as u32) as u32) << (own & 7));
+            // SAFETY: PACKED8's rows are eight bytes.
+            let order = _mm256_cvtepu8_epi32(unsafe {
+                _mm_loadl_epi64(PACKED8[hits as usize].as_ptr().cast())
+            });
+            let places = _mm256_add_epi32(_mm256_set1_epi32(l as i32), lane);
+            // SAFETY: len ≤ COLLECT − NARROW_LANES (cut above), so eight entries from len
+            // fit in both buffers of COLLECT + WIDE_LANES.
+            unsafe {
+                _mm256_storeu_si256(
+                    found.slots.as_mut_ptr().add(len).cast(),
+                    _mm256_permutevar8x32_epi32(places, order),
+                );
+                _mm256_storeu_ps(
+                    found.d2.as_mut_ptr().add(len),
+                    _mm256_permutevar8x32_ps(d2, order),
+                );
+            }
+            len += hits.count_ones() as usize;
+            l += NARROW_LANES;
+        }
+        found.len = len;
     }
 
     /// [`Scan::collect_runs`] with AVX-512: every run sixteen candidates at a time (a short
@@ -1482,7 +1631,7 @@ impl Scan<'_> {
         let (px, py, pz) = (self.p.0.x, self.p.1.x, self.p.2.x);
         // ∞: no candidate, nearer than none.
         let mut d2 = [f32::INFINITY; COLLECT + LANES];
-        if self.wide {
+        if self.lanes != Lanes::Four {
             d2[..n].copy_from_slice(&found.d2[..n]);
         } else {
             for (d, &s) in d2.iter_mut().zip(&found.slots[..n]) {
@@ -1492,13 +1641,13 @@ impl Scan<'_> {
             }
         }
         let kept = match n.div_ceil(LANES) {
-            // SAFETY: `wide` is set only where the CPU has AVX-512 F (`simd::avx512`).
+            // SAFETY: sixteen lanes only where the CPU has AVX-512 F (`Lanes::of_cpu`).
             #[cfg(target_arch = "x86_64")]
-            g if self.wide && g <= 2 * LANES => unsafe { ranked_below_wide::<2>(&d2, n, k) },
+            g if self.wide() && g <= 2 * LANES => unsafe { ranked_below_wide::<2>(&d2, n, k) },
             #[cfg(target_arch = "x86_64")]
-            g if self.wide && g <= 3 * LANES => unsafe { ranked_below_wide::<3>(&d2, n, k) },
+            g if self.wide() && g <= 3 * LANES => unsafe { ranked_below_wide::<3>(&d2, n, k) },
             #[cfg(target_arch = "x86_64")]
-            _ if self.wide => unsafe { ranked_below_wide::<4>(&d2, n, k) },
+            _ if self.wide() => unsafe { ranked_below_wide::<4>(&d2, n, k) },
             5 => ranked_below::<5>(&d2, n, k),
             6 => ranked_below::<6>(&d2, n, k),
             7 => ranked_below::<7>(&d2, n, k),
@@ -1634,11 +1783,13 @@ mod tests {
         // Candidates on a coarse lattice (many exact ties at every distance) and off it,
         // for every count up to a full `Found` and several k: the kept places must be the
         // k first of the candidates sorted by (distance, order found), in the order found.
-        // Ranked four lanes at a time and, where the CPU has AVX-512, sixteen.
+        // At every scan width the CPU has: four lanes (the distances worked out again),
+        // eight (the scan's distances) and sixteen (ranked sixteen at a time).
         let mut rng = Rng::new(7, 3, 1);
-        for trial in 0..8000 {
-            let wide = trial % 2 == 1 && crate::simd::avx512();
-            let trial = trial / 2;
+        let widths = Lanes::available();
+        for trial in 0..12000 {
+            let lanes = widths[trial % 3 % widths.len()];
+            let trial = trial / 3;
             let n = 2 + trial % (COLLECT - 1);
             let k = [1, 4, 7, 16, 16, 16, 24, 32][trial % 8].min(n - 1);
             let coarse = trial % 2 == 0;
@@ -1661,7 +1812,7 @@ mod tests {
                 p: (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO),
                 skip_slot: u32::MAX,
                 k,
-                wide,
+                lanes,
                 fine: None,
             };
             let mut found = Found::default();
@@ -1670,7 +1821,7 @@ mod tests {
                 *s = ((i * 37 + trial) % n) as u32;
             }
             found.len = n;
-            // With their squared distances, as the AVX-512 scan leaves them.
+            // With their squared distances, as the wider scans leave them.
             for (d, &s) in found.d2.iter_mut().zip(&found.slots[..n]) {
                 let p = pts[s as usize];
                 *d = p.x * p.x + p.y * p.y + p.z * p.z;
@@ -1687,7 +1838,7 @@ mod tests {
             assert_eq!(
                 &found.slots[..found.len],
                 &want[..],
-                "trial {trial}: n {n}, k {k}"
+                "trial {trial}: n {n}, k {k}, {lanes:?}"
             );
         }
     }
@@ -1733,14 +1884,15 @@ mod tests {
     }
 
     #[test]
-    fn the_wide_scan_finds_what_the_four_lane_scan_finds() {
-        // Where the CPU has AVX-512, long runs are scanned sixteen candidates at a time
-        // and candidates ranked sixteen at a time: the same lists in the same order as
-        // four at a time, in a sparse cloud, a middling one, a crowd (thin cells) and a
-        // lattice full of ties, for k from 1 to 32 (a full buffer of candidates kept at
-        // other points).
-        if !crate::simd::avx512() {
-            eprintln!("skipped: the AVX-512 paths do not run here (`simd::avx512`)");
+    fn every_scan_width_finds_what_the_four_lane_scan_finds() {
+        // Eight candidates at a time with AVX2, sixteen (and ranked sixteen at a time)
+        // with AVX-512, where the CPU has them: the same lists in the same order as four
+        // at a time, in a sparse cloud, a middling one, a crowd (thin cells) and a lattice
+        // full of ties, for k from 1 to 32 (a full buffer of candidates kept at other
+        // points).
+        let widths = Lanes::available();
+        if widths.len() == 1 {
+            eprintln!("skipped: no wide path runs here (`simd::level`)");
             return;
         }
         let lattice: Vec<Vec3> = (0..4096)
@@ -1756,13 +1908,17 @@ mod tests {
             let mut g = Grid::default();
             g.build(pts, *r);
             let (mut a, mut b) = ([0u32; MAX_K], [0u32; MAX_K]);
-            for k in [1, 7, 16, 32] {
+            for (k, &lanes) in [1, 7, 16, 32]
+                .iter()
+                .flat_map(|k| widths[1..].iter().map(move |l| (*k, l)))
+            {
                 for i in (0..pts.len()).step_by(13) {
                     let la =
-                        g.nearest_scanning(pts[i], *r, k, i, &mut a, true, &mut Found::default());
+                        g.nearest_scanning(pts[i], *r, k, i, &mut a, lanes, &mut Found::default());
+                    let four = Lanes::Four;
                     let lb =
-                        g.nearest_scanning(pts[i], *r, k, i, &mut b, false, &mut Found::default());
-                    assert_eq!(a[..la], b[..lb], "cloud {c}, k {k}, point {i}");
+                        g.nearest_scanning(pts[i], *r, k, i, &mut b, four, &mut Found::default());
+                    assert_eq!(a[..la], b[..lb], "cloud {c}, k {k}, point {i}, {lanes:?}");
                 }
             }
         }
@@ -1906,7 +2062,7 @@ mod tests {
             for (i, n) in queries.flat_map(|i| (0..12).map(move |n| (i, n))) {
                 let p = pts[i];
                 let reach = cell * (0.1 + 0.2 * n as f32);
-                for wide in [false, crate::simd::avx512()] {
+                for lanes in Lanes::available() {
                     let scan = Scan {
                         xs: &g.xs,
                         ys: &g.ys,
@@ -1914,7 +2070,7 @@ mod tests {
                         p: (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)),
                         skip_slot: g.slot[i],
                         k: MAX_K,
-                        wide,
+                        lanes,
                         fine: None,
                     };
                     let c = g.cell_of(p);
@@ -1978,10 +2134,7 @@ mod tests {
             assert!(!fine.coarse && coarse.coarse, "{n} points");
             assert_eq!(coarse.cell(), fine.cell());
             let mut kept = Found::default();
-            for wide in [false, true] {
-                if wide && !crate::simd::avx512() {
-                    continue;
-                }
+            for lanes in Lanes::available() {
                 for k in [2, 5, 16] {
                     for (i, &p) in pts.iter().enumerate() {
                         let (mut a, mut b) = ([0u32; MAX_K], [0u32; MAX_K]);
@@ -1991,11 +2144,11 @@ mod tests {
                             k,
                             i,
                             &mut a,
-                            wide,
+                            lanes,
                             &mut Found::default(),
                         );
-                        let nb = coarse.nearest_scanning(p, radius, k, i, &mut b, wide, &mut kept);
-                        assert_eq!(a[..na], b[..nb], "point {i}, k {k}, wide {wide}");
+                        let nb = coarse.nearest_scanning(p, radius, k, i, &mut b, lanes, &mut kept);
+                        assert_eq!(a[..na], b[..nb], "point {i}, k {k}, {lanes:?}");
                     }
                 }
             }
