@@ -1612,10 +1612,11 @@ impl Scan<'_> {
     }
 
     /// Keeps in `found` only the k nearest of its candidates, in their order, ties at the
-    /// k-th distance going to the first. Their squared distances are the AVX-512 scan's,
-    /// or worked out again as `collect` does (so the same bits). Up to `RANKED` candidates
-    /// (the usual case; with AVX-512, all): each one's rank, the number of candidates
-    /// strictly nearer, counted for four (or sixteen) at a time
+    /// k-th distance going to the first. Their squared distances are the eight- or
+    /// sixteen-lane scan's, or worked out again as `collect` does (so the same bits). Up to
+    /// `RANKED` candidates (the usual case; with AVX2 or AVX-512, all): each one's rank,
+    /// the number of candidates strictly nearer, counted for four (or eight, or sixteen)
+    /// at a time
     /// against every other, with no branch on the values (a sort's comparisons
     /// mispredict) and no chain of dependent steps; exactly k ranked below k are the k
     /// nearest. More, or a tie at the k-th distance (then more than k rank below k): the
@@ -1648,6 +1649,13 @@ impl Scan<'_> {
             g if self.wide() && g <= 3 * LANES => unsafe { ranked_below_wide::<3>(&d2, n, k) },
             #[cfg(target_arch = "x86_64")]
             _ if self.wide() => unsafe { ranked_below_wide::<4>(&d2, n, k) },
+            // SAFETY: eight lanes only where the CPU has AVX2 (`Lanes::of_cpu`).
+            #[cfg(target_arch = "x86_64")]
+            g if self.lanes == Lanes::Eight && g <= 4 => unsafe { ranked_below8::<2>(&d2, n, k) },
+            #[cfg(target_arch = "x86_64")]
+            g if self.lanes == Lanes::Eight && g <= 8 => unsafe { ranked_below8::<4>(&d2, n, k) },
+            #[cfg(target_arch = "x86_64")]
+            _ if self.lanes == Lanes::Eight => unsafe { ranked_below8::<8>(&d2, n, k) },
             5 => ranked_below::<5>(&d2, n, k),
             6 => ranked_below::<6>(&d2, n, k),
             7 => ranked_below::<7>(&d2, n, k),
@@ -1731,6 +1739,36 @@ fn ranked_below_wide<const R: usize>(d2: &[f32; COLLECT + LANES], n: usize, k: u
     let mut below = 0u64;
     for (r, &c) in nearer.iter().enumerate() {
         below |= (_mm512_cmplt_epi32_mask(c, k) as u64) << (r * WIDE_LANES);
+    }
+    // (n = 64 keeps every bit.)
+    below & (u64::MAX >> (64 - n))
+}
+
+/// [`ranked_below`] with AVX2, for up to `R` × 8 (at most 64) candidates: each
+/// candidate's comparison with all of them one compare per register, counted by
+/// subtracting its all-ones (−1) lanes. The same comparisons, so the same bits set.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn ranked_below8<const R: usize>(d2: &[f32; COLLECT + LANES], n: usize, k: usize) -> u64 {
+    use std::arch::x86_64::*;
+    const { assert!(R * NARROW_LANES <= COLLECT && R * NARROW_LANES <= 64) };
+    debug_assert!(n <= R * NARROW_LANES);
+    // SAFETY: every load lies within `d2` (asserted above).
+    let groups: [__m256; R] =
+        std::array::from_fn(|r| unsafe { _mm256_loadu_ps(d2.as_ptr().add(r * NARROW_LANES)) });
+    let mut nearer = [_mm256_setzero_si256(); R];
+    for &di in &d2[..n] {
+        let di = _mm256_set1_ps(di);
+        for (c, &dj) in nearer.iter_mut().zip(&groups) {
+            let m = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(di, dj));
+            *c = _mm256_sub_epi32(*c, m);
+        }
+    }
+    let k = _mm256_set1_epi32(k as i32);
+    let mut below = 0u64;
+    for (r, &c) in nearer.iter().enumerate() {
+        let fewer = _mm256_castsi256_ps(_mm256_cmpgt_epi32(k, c));
+        below |= (_mm256_movemask_ps(fewer) as u32 as u64) << (r * NARROW_LANES);
     }
     // (n = 64 keeps every bit.)
     below & (u64::MAX >> (64 - n))
