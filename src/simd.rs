@@ -1,6 +1,6 @@
-//! Which SIMD instruction sets the wide paths take: the grid's ranking and a crowd's near
-//! rows (AVX-512), and the grid's scan, the bee's pair and density sums, the curl noise
-//! and fastswarm's energies and choice (AVX2 or AVX-512). Every wide path does the IEEE operations of its portable fallback in
+//! Which SIMD instruction sets the wide paths take: the grid's scan, ranking and near
+//! rows, the bee's pair and density sums, the curl noise, and fastswarm's energies and
+//! choice, each with AVX2 or AVX-512. Every wide path does the IEEE operations of its portable fallback in
 //! the same order, so a cache is the same bytes whichever level ran
 //! (`tests/determinism.rs` bakes a shot of every model on each level the CPU has): the
 //! level changes speed only.
@@ -20,10 +20,9 @@ pub const ENV: &str = "BEESWARM_SIMD";
 pub enum Level {
     /// The portable code: SSE4.2-era x86-64 (the build's baseline) or any other target.
     Portable = 0,
-    /// AVX2: the eight-lane paths (the grid's scan, the bee's pair sums, the curl noise,
-    /// fastswarm).
+    /// AVX2: every wide path in eight lanes.
     Avx2 = 1,
-    /// AVX-512 F and VL (with AVX2): every wide path.
+    /// AVX-512 F and VL (with AVX2): every wide path, most in sixteen lanes.
     Avx512 = 2,
 }
 

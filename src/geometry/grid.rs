@@ -816,11 +816,11 @@ impl Grid {
             let ring1 = !beyond(margin, radius, r2);
             let mut runs = Runs::new();
             #[cfg(target_arch = "x86_64")]
-            if scan.wide() {
-                // SAFETY: sixteen lanes only where the CPU has AVX-512 F (`Lanes::of_cpu`).
-                unsafe { self.near_rows_wide(p, c, r2, ring1, &mut runs) };
-            } else {
-                self.near_rows(p, c, r2, ring1, &mut runs);
+            match scan.lanes {
+                // SAFETY (both): a width only where the CPU has it (`Lanes::of_cpu`).
+                Lanes::Sixteen => unsafe { self.near_rows_wide(p, c, r2, ring1, &mut runs) },
+                Lanes::Eight => unsafe { self.near_rows8(p, c, r2, ring1, &mut runs) },
+                Lanes::Four => self.near_rows(p, c, r2, ring1, &mut runs),
             }
             #[cfg(not(target_arch = "x86_64"))]
             self.near_rows(p, c, r2, ring1, &mut runs);
@@ -898,31 +898,130 @@ impl Grid {
     /// a branch per row missed about as often as it was taken.
     #[inline(always)]
     fn near_rows(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
-        let (d, o) = (self.dims, self.origin);
+        let o = self.origin;
         // Squared distances to the slabs of c.z − 1, c.z, c.z + 1 (and y alike), as
         // `walk` and `row` work them out; those of slabs outside the grid are not used.
         let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
         let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
-        // (y offset, z offset, in ring 1): ring 0's row, then ring 1's in walk's order.
-        const ROWS: [(i32, i32, bool); 9] = [
-            (0, 0, false),
-            (-1, -1, true),
-            (0, -1, true),
-            (1, -1, true),
-            (-1, 0, true),
-            (1, 0, true),
-            (-1, 1, true),
-            (0, 1, true),
-            (1, 1, true),
-        ];
-        for (dy, dz, outer) in ROWS {
-            let (y, z) = (c.y + dy, c.z + dz);
-            let inside = y >= 0 && y < d.y && z >= 0 && z < d.z;
-            let dyz2 = dz2[(dz + 1) as usize] + dy2[(dy + 1) as usize];
-            let keep = inside & (ring1 | !outer) & (dyz2 < r2);
-            let w = (r2 - dyz2).max(0.0).sqrt();
-            let (y, z) = (y.clamp(0, d.y - 1), z.clamp(0, d.z - 1));
-            runs.put(self.chord(p, y, z, w), keep);
+        for row in NEAR_ROWS {
+            self.near_row(p, c, (dz2, dy2), r2, ring1, row, runs);
+        }
+    }
+
+    /// One of `near_rows`' rows, `(y offset, z offset, in ring 1)`, given the squared
+    /// distances to the slabs around `c` along z and y.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn near_row(
+        &self,
+        p: Vec3,
+        c: IVec3,
+        (dz2, dy2): ([f32; 3], [f32; 3]),
+        r2: f32,
+        ring1: bool,
+        (dy, dz, outer): (i32, i32, bool),
+        runs: &mut Runs,
+    ) {
+        let d = self.dims;
+        let (y, z) = (c.y + dy, c.z + dz);
+        let inside = y >= 0 && y < d.y && z >= 0 && z < d.z;
+        let dyz2 = dz2[(dz + 1) as usize] + dy2[(dy + 1) as usize];
+        let keep = inside & (ring1 | !outer) & (dyz2 < r2);
+        let w = (r2 - dyz2).max(0.0).sqrt();
+        let (y, z) = (y.clamp(0, d.y - 1), z.clamp(0, d.z - 1));
+        runs.put(self.chord(p, y, z, w), keep);
+    }
+
+    /// [`Grid::near_rows`] with AVX2: ring 0's row as there, then ring 1's eight rows in
+    /// eight lanes, each lane `near_row`'s arithmetic and the rows' starts gathered, so the
+    /// same runs in the same order.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn near_rows8(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
+        use std::arch::x86_64::*;
+        let (d, o) = (self.dims, self.origin);
+        let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
+        let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
+        self.near_row(p, c, (dz2, dy2), r2, ring1, NEAR_ROWS[0], runs);
+        if !ring1 {
+            // Ring 1's rows would be listed only to be dropped.
+            return;
+        }
+        let int = _mm256_set1_epi32;
+        // `NEAR_ROWS[1..]`, lane by lane: y and z offsets.
+        const DY: [i32; 8] = [-1, 0, 1, -1, 1, -1, 0, 1];
+        const DZ: [i32; 8] = [-1, -1, -1, 0, 0, 1, 1, 1];
+        const {
+            let mut l = 0;
+            while l < 8 {
+                assert!(NEAR_ROWS[l + 1].0 == DY[l] && NEAR_ROWS[l + 1].1 == DZ[l]);
+                l += 1;
+            }
+        }
+        // SAFETY (the loads): each array holds eight lanes.
+        let (dy, dz) = unsafe {
+            (
+                _mm256_loadu_si256(DY.as_ptr().cast()),
+                _mm256_loadu_si256(DZ.as_ptr().cast()),
+            )
+        };
+        let (y, z) = (
+            _mm256_add_epi32(int(c.y), dy),
+            _mm256_add_epi32(int(c.z), dz),
+        );
+        let within = |v, n| {
+            _mm256_and_si256(
+                _mm256_cmpgt_epi32(v, int(-1)),
+                _mm256_cmpgt_epi32(int(n), v),
+            )
+        };
+        let inside = _mm256_and_si256(within(y, d.y), within(z, d.z));
+        // dz2[dz + 1] + dy2[dy + 1], lane by lane.
+        let table = |t: [f32; 3]| _mm256_setr_ps(t[0], t[1], t[2], 0.0, 0.0, 0.0, 0.0, 0.0);
+        let dyz2 = _mm256_add_ps(
+            _mm256_permutevar8x32_ps(table(dz2), _mm256_add_epi32(dz, int(1))),
+            _mm256_permutevar8x32_ps(table(dy2), _mm256_add_epi32(dy, int(1))),
+        );
+        let r2v = _mm256_set1_ps(r2);
+        let near = _mm256_cmp_ps::<_CMP_LT_OQ>(dyz2, r2v);
+        let keep = _mm256_movemask_ps(_mm256_and_ps(_mm256_castsi256_ps(inside), near));
+        let zero = _mm256_setzero_ps();
+        let w = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(r2v, dyz2), zero));
+        let clamp = |v, hi| _mm256_min_epi32(_mm256_max_epi32(v, int(0)), int(hi));
+        let (y, z) = (clamp(y, d.y - 1), clamp(z, d.z - 1));
+        // `chord`.
+        let (px, ox) = (_mm256_set1_ps(p.x), _mm256_set1_ps(o.x));
+        let (inv, last) = (
+            _mm256_set1_ps(self.inv_cell.x),
+            _mm256_set1_ps((d.x - 1) as f32),
+        );
+        let cell_x = |x| {
+            let v = _mm256_mul_ps(_mm256_sub_ps(x, ox), inv);
+            _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, zero), last))
+        };
+        let (a, b) = (cell_x(_mm256_sub_ps(px, w)), cell_x(_mm256_add_ps(px, w)));
+        let row = _mm256_mullo_epi32(
+            int(d.x),
+            _mm256_add_epi32(y, _mm256_mullo_epi32(int(d.y), z)),
+        );
+        assert_eq!(self.starts.len(), (d.x * d.y * d.z) as usize + 1);
+        // SAFETY: y and z are clamped into the grid and a ≤ b ≤ d.x − 1, so every index
+        // is at most d.x·d.y·d.z, within `starts` (asserted above).
+        let (s, e) = unsafe {
+            let at = |i| _mm256_i32gather_epi32::<4>(self.starts.as_ptr().cast(), i);
+            (
+                at(_mm256_add_epi32(row, a)),
+                at(_mm256_add_epi32(_mm256_add_epi32(row, b), int(1))),
+            )
+        };
+        let (mut starts, mut ends) = ([0u32; 8], [0u32; 8]);
+        // SAFETY: each array holds eight u32s.
+        unsafe {
+            _mm256_storeu_si256(starts.as_mut_ptr().cast(), s);
+            _mm256_storeu_si256(ends.as_mut_ptr().cast(), e);
+        }
+        for l in 0..8 {
+            runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
         }
     }
 
@@ -1111,6 +1210,20 @@ fn for_each_placed(
 
 /// Rows a ring walk lists before collecting them.
 const RUNS: usize = 32;
+
+/// `Grid::near_rows`' rows, (y offset, z offset, in ring 1): ring 0's row, then ring 1's
+/// in the ring walk's order.
+const NEAR_ROWS: [(i32, i32, bool); 9] = [
+    (0, 0, false),
+    (-1, -1, true),
+    (0, -1, true),
+    (1, -1, true),
+    (-1, 0, true),
+    (1, 0, true),
+    (-1, 1, true),
+    (0, 1, true),
+    (1, 1, true),
+];
 
 /// Runs `(start, end)` of the sorted arrays listed for collecting, in walk order. The
 /// list starts uninitialised: zeroing its 256 bytes at every walk was a `memset` call, 1 %
