@@ -1,7 +1,7 @@
 //! Which SIMD instruction sets the wide paths take: the grid's scan, ranking and near
 //! rows, the bee's pair and density sums, the curl noise, and fastswarm's energies and
-//! choice, each with AVX2 or AVX-512. Every wide path does the IEEE operations of its portable fallback in
-//! the same order, so a cache is the same bytes whichever level ran
+//! choice, each with AVX2 or AVX-512. Every wide path does the IEEE operations of its
+//! portable fallback in the same order, so a cache is the same bytes whichever level ran
 //! (`tests/determinism.rs` bakes a shot of every model on each level the CPU has): the
 //! level changes speed only.
 //!
