@@ -181,14 +181,27 @@ unsafe fn sums16(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3,
     };
     let (rep, col) = (rep.map(lanes), col.map(lanes));
     let (mut a_rep, mut a_col) = (Vec3::ZERO, Vec3::ZERO);
+    add_in_order(&rep, &col, within as u32, &mut a_rep, &mut a_col);
+    Some((a_rep, a_col))
+}
+
+/// Adds to `a_rep` and `a_col` the terms (x, y, z by lane) of the lanes set in `within`,
+/// in lane order, the list's: a zero term too, as the loop adds it.
+#[inline(always)]
+fn add_in_order<const W: usize>(
+    rep: &[[f32; W]; 3],
+    col: &[[f32; W]; 3],
+    within: u32,
+    a_rep: &mut Vec3,
+    a_col: &mut Vec3,
+) {
     let mut left = within;
     while left != 0 {
         let l = left.trailing_zeros() as usize;
         left &= left - 1;
-        a_rep += Vec3::new(rep[0][l], rep[1][l], rep[2][l]);
-        a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
+        *a_rep += Vec3::new(rep[0][l], rep[1][l], rep[2][l]);
+        *a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
     }
-    Some((a_rep, a_col))
 }
 
 /// A record's five pairs of f32s, by bit: all of them.
@@ -510,13 +523,7 @@ unsafe fn sums8(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, 
             a
         };
         let (rep, col) = (rep.map(lanes), col.map(lanes));
-        let mut left = within;
-        while left != 0 {
-            let l = left.trailing_zeros() as usize;
-            left &= left - 1;
-            a_rep += Vec3::new(rep[0][l], rep[1][l], rep[2][l]);
-            a_col += Vec3::new(col[0][l], col[1][l], col[2][l]);
-        }
+        add_in_order(&rep, &col, within, &mut a_rep, &mut a_col);
     }
     Some((a_rep, a_col))
 }
