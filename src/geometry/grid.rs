@@ -27,6 +27,7 @@
 //! every floating-point sum visits them in — are the same whatever the number of threads.
 
 use glam::{IVec3, Vec3, Vec4};
+use rayon::prelude::*;
 use std::mem::MaybeUninit;
 
 /// A crowd query first looks for its k nearest within this multiple of the distance that
@@ -71,7 +72,6 @@ impl Lanes {
             .collect()
     }
 }
-use rayon::prelude::*;
 
 /// Agents per cell a typical agent sees (bee-weighted mean occupancy) that the cell edge
 /// aims at in crowds: small enough that the ring walk tests few far candidates, large
