@@ -898,14 +898,22 @@ impl Grid {
     /// a branch per row missed about as often as it was taken.
     #[inline(always)]
     fn near_rows(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
-        let o = self.origin;
-        // Squared distances to the slabs of c.z − 1, c.z, c.z + 1 (and y alike), as
-        // `walk` and `row` work them out; those of slabs outside the grid are not used.
-        let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
-        let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
+        let slabs = self.slabs_around(p, c);
         for row in NEAR_ROWS {
-            self.near_row(p, c, (dz2, dy2), r2, ring1, row, runs);
+            self.near_row(p, c, slabs, r2, ring1, row, runs);
         }
+    }
+
+    /// The squared distances from p to the slabs of c.z − 1, c.z, c.z + 1 and of c.y − 1,
+    /// c.y, c.y + 1, as `walk` and `row` work them out (those of slabs outside the grid are
+    /// not used): what every width of `near_rows` starts from.
+    #[inline(always)]
+    fn slabs_around(&self, p: Vec3, c: IVec3) -> ([f32; 3], [f32; 3]) {
+        let o = self.origin;
+        (
+            [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k)),
+            [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k)),
+        )
     }
 
     /// One of `near_rows`' rows, `(y offset, z offset, in ring 1)`, given the squared
@@ -940,8 +948,7 @@ impl Grid {
     fn near_rows8(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
         use std::arch::x86_64::*;
         let (d, o) = (self.dims, self.origin);
-        let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
-        let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
+        let (dz2, dy2) = self.slabs_around(p, c);
         self.near_row(p, c, (dz2, dy2), r2, ring1, NEAR_ROWS[0], runs);
         if !ring1 {
             // Ring 1's rows would be listed only to be dropped.
@@ -1033,9 +1040,8 @@ impl Grid {
     fn near_rows_wide(&self, p: Vec3, c: IVec3, r2: f32, ring1: bool, runs: &mut Runs) {
         use std::arch::x86_64::*;
         let (d, o) = (self.dims, self.origin);
-        let dz2 = [-1, 0, 1].map(|k| self.slab_d2(p.z, o.z, c.z + k));
-        let dy2 = [-1, 0, 1].map(|k| self.slab_d2(p.y, o.y, c.y + k));
-        // `near_rows`' ROWS, lane by lane (lanes 9 to 15 unused): y and z offsets.
+        let (dz2, dy2) = self.slabs_around(p, c);
+        // `NEAR_ROWS`, lane by lane (lanes 9 to 15 unused): y and z offsets.
         const DY: [i32; 16] = [0, -1, 0, 1, -1, 1, -1, 0, 1, 0, 0, 0, 0, 0, 0, 0];
         const DZ: [i32; 16] = [0, -1, -1, -1, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0];
         const NINE: __mmask16 = 0x1FF;
