@@ -19,6 +19,34 @@ const WIDE_FROM: usize = 8;
 /// Lists at least this long take the eight lanes (where the sixteen do not).
 const NARROW_FROM: usize = 6;
 
+/// The lanes that take a list here: sixteen, eight, or none (the one-at-a-time loop).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+enum Width {
+    Loop,
+    /// AVX2 (either level).
+    Eight,
+    /// AVX-512 F.
+    Sixteen,
+}
+
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+impl Width {
+    /// The width for a list of `len` neighbours, from `crate::simd`'s level.
+    #[inline]
+    fn of(len: usize) -> Width {
+        use crate::simd::Level;
+        if len < NARROW_FROM {
+            return Width::Loop;
+        }
+        match crate::simd::level() {
+            Level::Avx512 if len >= WIDE_FROM => Width::Sixteen,
+            Level::Avx512 | Level::Avx2 => Width::Eight,
+            Level::Portable => Width::Loop,
+        }
+    }
+}
+
 /// What the pair terms of one bee need besides its neighbours.
 pub(super) struct Bee<'a> {
     pub kernels: &'a Kernels,
@@ -41,17 +69,11 @@ pub(super) struct Bee<'a> {
 #[inline]
 pub(super) fn sums(agents: &[Neighbour], list: &[u32], bee: &Bee) -> Option<(Vec3, Vec3)> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= NARROW_FROM {
-        use crate::simd::Level;
-        match crate::simd::level() {
-            // SAFETY: the CPU has AVX-512 F (checked by the level).
-            Level::Avx512 if list.len() >= WIDE_FROM => {
-                return unsafe { sums16(agents, list, bee) };
-            }
-            // SAFETY: the CPU has AVX2 (either level).
-            Level::Avx512 | Level::Avx2 => return unsafe { sums8(agents, list, bee) },
-            Level::Portable => {}
-        }
+    match Width::of(list.len()) {
+        // SAFETY (both): the CPU has the width's instructions (`Width::of`).
+        Width::Sixteen => return unsafe { sums16(agents, list, bee) },
+        Width::Eight => return unsafe { sums8(agents, list, bee) },
+        Width::Loop => {}
     }
     let _ = (agents, list, bee);
     None
@@ -288,17 +310,11 @@ pub(super) fn density_sum(
     own: f32,
 ) -> Option<f32> {
     #[cfg(target_arch = "x86_64")]
-    if list.len() >= NARROW_FROM {
-        use crate::simd::Level;
-        match crate::simd::level() {
-            // SAFETY: the CPU has AVX-512 F (checked by the level).
-            Level::Avx512 if list.len() >= WIDE_FROM => {
-                return unsafe { density16(k, agents, list, me, own) };
-            }
-            // SAFETY: the CPU has AVX2 (either level).
-            Level::Avx512 | Level::Avx2 => return unsafe { density8(k, agents, list, me, own) },
-            Level::Portable => {}
-        }
+    match Width::of(list.len()) {
+        // SAFETY (both): the CPU has the width's instructions (`Width::of`).
+        Width::Sixteen => return unsafe { density16(k, agents, list, me, own) },
+        Width::Eight => return unsafe { density8(k, agents, list, me, own) },
+        Width::Loop => {}
     }
     let _ = (k, agents, list, me, own);
     None
