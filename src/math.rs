@@ -70,6 +70,18 @@ pub fn yaw_of(dir: Vec3) -> f32 {
     atan2(-dir.z, dir.x)
 }
 
+/// [`atan2`]'s polynomial in a² (a = the smaller of |x|, |y| over the larger), lowest
+/// degree first (also `model::attitudes::atan2_4`'s).
+pub(crate) const ATAN2_POLY: [f32; 7] = [
+    0.999_996_1,
+    -0.333_173_7,
+    0.198_078_16,
+    -0.132_333_4,
+    0.079_623_63,
+    -0.033_604_18,
+    0.006_811_778_5,
+];
+
 /// atan2(y, x) in radians, in [−π, π], within 5e-7 rad of the exact value (two f32 steps at π; tested): an
 /// odd polynomial of degree 13 on [0, 1] (a minimax fit) after reducing to the octant.
 /// About a fifth of the C library's instructions in the steps that call it twice per
@@ -77,15 +89,7 @@ pub fn yaw_of(dir: Vec3) -> f32 {
 /// x ≥ 0 and ±π for x < 0, as in C; atan2(0, 0) is 0.
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
-    const C: [f32; 7] = [
-        0.999_996_1,
-        -0.333_173_7,
-        0.198_078_16,
-        -0.132_333_4,
-        0.079_623_63,
-        -0.033_604_18,
-        0.006_811_778_5,
-    ];
+    const C: [f32; 7] = ATAN2_POLY;
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
     let a = if hi > 0.0 { lo / hi } else { 0.0 };

@@ -11,6 +11,7 @@
 //! Every function here returns accelerations (m/s²) or velocities (m/s) in the world frame
 //! unless it says otherwise.
 
+pub mod attitudes;
 pub mod bee;
 pub mod boids;
 pub mod brownian;
@@ -294,6 +295,13 @@ pub trait Model: Sized + Send + Sync {
     /// The agent's attitude for the caches; its angular velocity over the last substep,
     /// `spin_dt` seconds long, only when asked for (`None`: zero, and not worked out).
     fn pose(&self, agent: &Self::Agent, spin_dt: Option<f32>) -> Pose;
+
+    /// Four agents' poses at once, as the recording pass asks for them (a model may work
+    /// them out in SIMD lanes, [`attitudes`]); by default [`Model::pose`] for each. Must
+    /// give what `pose` gives for each agent.
+    fn poses(&self, agents: [&Self::Agent; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        agents.map(|a| self.pose(a, spin_dt))
+    }
 
     /// Writes one value per channel of `INFO.channels`.
     fn record(&self, agent: &Self::Agent, pose: &Pose, channels: &mut [f32]);

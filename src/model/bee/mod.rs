@@ -16,6 +16,7 @@ pub mod repulsion;
 
 pub use params::BeeParams;
 
+use super::attitudes::{self, Attitudes};
 use super::context::{Context, Neighbour, TargetNow};
 use super::curl_now::CurlNow;
 use super::flight::{Avoidance, Cruiser, Flight, lag_blend};
@@ -23,7 +24,7 @@ use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup, vision};
 use crate::field::CurlNoise;
 use crate::math::{self, Rng, normalize_or};
 use crate::species::{BEE_CHANNELS, HONEYBEE};
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec4};
 use kernels::Kernels;
 use oscillation::Phasor;
 
@@ -517,19 +518,35 @@ impl Model for BeeModel {
     }
 
     fn pose(&self, b: &Bee, spin_dt: Option<f32>) -> Pose {
-        // `attitude`, its heading's rotation worked out once for both.
-        let heading = Quat::from_rotation_y(b.c.yaw);
-        let orientation = math::body_orientation_after(
-            heading,
-            b.pitch_deg.to_radians(),
-            b.drawn_roll_deg.to_radians(),
-        );
-        let (y, p, r) = b.prev_attitude;
-        Pose {
-            orientation,
-            heading,
-            angular_velocity_deg: math::spin_deg(spin_dt, || attitude(y, p, r), orientation),
+        self.poses([b; 4], spin_dt)[0]
+    }
+
+    fn poses(&self, bees: [&Bee; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        // `attitude` four at a time (`attitudes`: the same bits on every CPU).
+        fn lanes(bees: [&Bee; 4], f: impl Fn(&Bee) -> f32) -> Vec4 {
+            Vec4::from_array(bees.map(f))
         }
+        let now = Attitudes {
+            yaw: lanes(bees, |b| b.c.yaw),
+            pitch: lanes(bees, |b| b.pitch_deg.to_radians()),
+            roll: lanes(bees, |b| b.drawn_roll_deg.to_radians()),
+        };
+        let (orientation, heading) = attitudes::orientations(&now);
+        let spin = spin_dt.map_or([Vec3::ZERO; 4], |dt| {
+            let before = Attitudes {
+                yaw: lanes(bees, |b| b.prev_attitude.0),
+                pitch: lanes(bees, |b| b.prev_attitude.1.to_radians()),
+                roll: lanes(bees, |b| b.prev_attitude.2.to_radians()),
+            };
+            let from = attitudes::orientations(&before).0;
+            attitudes::angular_velocities(&from, &orientation, dt)
+                .map(|w| w * (180.0 / std::f32::consts::PI))
+        });
+        std::array::from_fn(|k| Pose {
+            orientation: orientation.lane(k),
+            heading: heading.lane(k),
+            angular_velocity_deg: spin[k],
+        })
     }
 
     fn record(&self, b: &Bee, pose: &Pose, channels: &mut [f32]) {
@@ -627,9 +644,4 @@ fn pairs_one_by_one(cx: &Context, i: usize, bee: &pairs::Bee) -> (Vec3, Vec3) {
 /// Elevation of `v` above the horizontal, degrees.
 fn elevation_deg(v: Vec3) -> f32 {
     math::atan2(v.y, Vec3::new(v.x, 0.0, v.z).length()).to_degrees()
-}
-
-/// Body orientation from heading (radians) and pitch and roll (degrees).
-pub fn attitude(yaw: f32, pitch_deg: f32, roll_deg: f32) -> Quat {
-    math::body_orientation(yaw, pitch_deg.to_radians(), roll_deg.to_radians())
 }
