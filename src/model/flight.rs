@@ -412,18 +412,35 @@ impl Flyer {
         Flyer { c, prev_yaw: c.yaw }
     }
 
-    /// The attitude of level flight along the heading (`Model::pose`).
+    /// The attitude of level flight along the heading (`Model::pose`): [`Flyer::poses`]'s.
     pub fn pose(&self, spin_dt: Option<f32>) -> super::Pose {
-        let orientation = math::body_orientation(self.c.yaw, 0.0, 0.0);
-        super::Pose {
-            orientation,
-            heading: glam::Quat::from_rotation_y(self.c.yaw),
-            angular_velocity_deg: math::spin_deg(
-                spin_dt,
-                || math::body_orientation(self.prev_yaw, 0.0, 0.0),
-                orientation,
-            ),
-        }
+        Flyer::poses([self; 4], spin_dt)[0]
+    }
+
+    /// Four flyers' attitudes at once (`Model::poses`, by `super::attitudes`): the body
+    /// along the heading, `Ry(yaw)`, turning from `Ry(prev_yaw)`.
+    pub fn poses(flyers: [&Flyer; 4], spin_dt: Option<f32>) -> [super::Pose; 4] {
+        use super::attitudes::{Quat4, angular_velocities, sin_cos4};
+        let about_y = |yaw: [f32; 4]| {
+            let (s, c) = sin_cos4(glam::Vec4::from_array(yaw) * 0.5);
+            let zero = glam::Vec4::ZERO;
+            Quat4 {
+                x: zero,
+                y: s,
+                z: zero,
+                w: c,
+            }
+        };
+        let now = about_y(flyers.map(|f| f.c.yaw));
+        let spin = spin_dt.map_or([Vec3::ZERO; 4], |dt| {
+            let before = about_y(flyers.map(|f| f.prev_yaw));
+            angular_velocities(&before, &now, dt).map(|w| w * (180.0 / std::f32::consts::PI))
+        });
+        std::array::from_fn(|k| super::Pose {
+            orientation: now.lane(k),
+            heading: now.lane(k),
+            angular_velocity_deg: spin[k],
+        })
     }
 }
 

@@ -147,6 +147,10 @@ impl Model for CurlModel {
         b.pose(spin_dt)
     }
 
+    fn poses(&self, b: [&Flyer; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        Flyer::poses(b, spin_dt)
+    }
+
     fn record(&self, _: &Flyer, _: &Pose, _: &mut [f32]) {}
 }
 

@@ -301,6 +301,10 @@ impl Model for FastswarmModel {
         b.fly.pose(spin_dt)
     }
 
+    fn poses(&self, b: [&Insect; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        Flyer::poses(b.map(|b| &b.fly), spin_dt)
+    }
+
     fn record(&self, b: &Insect, _: &Pose, channels: &mut [f32]) {
         channels[0] = b.fly.c.vel.length();
         channels[1] = if b.startled { 1.0 } else { 0.0 };

@@ -302,6 +302,10 @@ impl Model for ZonalModel {
         a.f.pose(spin_dt)
     }
 
+    fn poses(&self, a: [&Insect; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        Flyer::poses(a.map(|a| &a.f), spin_dt)
+    }
+
     fn record(&self, a: &Insect, _: &Pose, channels: &mut [f32]) {
         channels[0] = a.f.c.vel.length();
         channels[1] = if a.escaping { 1.0 } else { 0.0 };
