@@ -106,17 +106,11 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 }
 
 /// Body orientation from heading yaw, pitch and roll (radians):
-/// `Ry(yaw) * Rz(pitch) * Rx(roll)` — X forward, Y up, Z right.
+/// `Ry(yaw) * Rz(pitch) * Rx(roll)` — X forward, Y up, Z right. (The recorded poses work
+/// it out four at a time: `model::attitudes`.)
 #[inline]
 pub fn body_orientation(yaw: f32, pitch: f32, roll: f32) -> Quat {
-    body_orientation_after(Quat::from_rotation_y(yaw), pitch, roll)
-}
-
-/// [`body_orientation`] from the heading's rotation `Ry(yaw)`, for callers that need it
-/// too (the same bits).
-#[inline]
-pub fn body_orientation_after(heading: Quat, pitch: f32, roll: f32) -> Quat {
-    heading * Quat::from_rotation_z(pitch) * Quat::from_rotation_x(roll)
+    Quat::from_rotation_y(yaw) * Quat::from_rotation_z(pitch) * Quat::from_rotation_x(roll)
 }
 
 /// `floor` as an integer without a library call (x86-64 without SSE4.1 has no floor
@@ -149,16 +143,6 @@ pub fn wrap_tau(a: f32) -> f32 {
     } else {
         w
     }
-}
-
-/// The recorded angular velocity, degrees per second (world frame), of the turn from
-/// `from()` to `to` over the substep `spin_dt`; zero, with `from` never worked out, when
-/// no cache asks for it (`spin_dt` is `None`: see `sim::Simulation::record_spin`).
-#[inline]
-pub fn spin_deg(spin_dt: Option<f32>, from: impl FnOnce() -> Quat, to: Quat) -> Vec3 {
-    spin_dt.map_or(Vec3::ZERO, |dt| {
-        angular_velocity(from(), to, dt) * (180.0 / std::f32::consts::PI)
-    })
 }
 
 /// Angular velocity (rad/s, world frame) taking `from` to `to` in `dt` seconds.

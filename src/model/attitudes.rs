@@ -10,6 +10,7 @@
 //! roots, each rounded once (no fused multiply-add), so every CPU and every SIMD level
 //! gives the same bits, and the caches stay identical on any machine.
 
+use super::Pose;
 use crate::math;
 use glam::{BVec4A, Quat, Vec3, Vec4};
 
@@ -38,12 +39,66 @@ pub struct Attitudes {
     pub roll: Vec4,
 }
 
+impl Attitudes {
+    /// The attitudes `(yaw, pitch, roll)`, radians, that `f` gives four agents.
+    #[inline]
+    pub fn of<A>(agents: [&A; 4], f: impl Fn(&A) -> (f32, f32, f32)) -> Attitudes {
+        let a = agents.map(f);
+        Attitudes {
+            yaw: Vec4::from_array(a.map(|a| a.0)),
+            pitch: Vec4::from_array(a.map(|a| a.1)),
+            roll: Vec4::from_array(a.map(|a| a.2)),
+        }
+    }
+}
+
+/// Four agents' poses (`Model::poses`) from their attitudes now and, only where the
+/// angular velocity over the last substep (`spin_dt` seconds) is asked for, one substep
+/// earlier (`before`); otherwise the angular velocity is zero.
+#[inline]
+pub fn poses(
+    now: &Attitudes,
+    before: impl FnOnce() -> Attitudes,
+    spin_dt: Option<f32>,
+) -> [Pose; 4] {
+    let (body, heading) = orientations(now);
+    assemble(&body, &heading, || orientations(&before()).0, spin_dt)
+}
+
+/// [`poses`] of level bodies, along their headings (yaw now, and one substep earlier:
+/// `before`), without working out a pitch and a roll of zero.
+#[inline]
+pub fn level_poses(yaw: Vec4, before: impl FnOnce() -> Vec4, spin_dt: Option<f32>) -> [Pose; 4] {
+    let heading = about_y(yaw);
+    assemble(&heading, &heading, || about_y(before()), spin_dt)
+}
+
+/// The poses of bodies `body` with headings `heading`, turned from `from()` over the last
+/// substep where `spin_dt` asks for it.
+#[inline]
+fn assemble(
+    body: &Quat4,
+    heading: &Quat4,
+    from: impl FnOnce() -> Quat4,
+    spin_dt: Option<f32>,
+) -> [Pose; 4] {
+    let spin = spin_dt.map_or([Vec3::ZERO; 4], |dt| {
+        angular_velocities(&from(), body, dt).map(|w| w * (180.0 / std::f32::consts::PI))
+    });
+    std::array::from_fn(|k| Pose {
+        orientation: body.lane(k),
+        heading: heading.lane(k),
+        angular_velocity_deg: spin[k],
+    })
+}
+
 /// The body orientations `Ry(yaw) · Rz(pitch) · Rx(roll)` of `a`, and the heading alone,
 /// `Ry(yaw)` (its rotation about world +Y).
 #[inline]
 pub fn orientations(a: &Attitudes) -> (Quat4, Quat4) {
     let half = Vec4::splat(0.5);
-    let (sy, cy) = sin_cos4(a.yaw * half);
+    let heading = about_y(a.yaw);
+    let (sy, cy) = (heading.y, heading.w);
     let (sp, cp) = sin_cos4(a.pitch * half);
     let (sr, cr) = sin_cos4(a.roll * half);
     // The product of the three axis rotations written out: Ry · Rz is
@@ -55,14 +110,19 @@ pub fn orientations(a: &Attitudes) -> (Quat4, Quat4) {
         z: z1 * cr - y1 * sr,
         w: w1 * cr - x1 * sr,
     };
-    let zero = Vec4::ZERO;
-    let heading = Quat4 {
-        x: zero,
-        y: sy,
-        z: zero,
-        w: cy,
-    };
     (body, heading)
+}
+
+/// The rotations `Ry(yaw)` (about world +Y).
+#[inline]
+fn about_y(yaw: Vec4) -> Quat4 {
+    let (s, c) = sin_cos4(yaw * Vec4::splat(0.5));
+    Quat4 {
+        x: Vec4::ZERO,
+        y: s,
+        z: Vec4::ZERO,
+        w: c,
+    }
 }
 
 /// The angular velocities (radians per second, world frame) turning `from` into `to`
@@ -275,6 +335,30 @@ mod tests {
                 assert!((body.lane(k).length() - 1.0).abs() < 1e-6);
                 let yaw = Quat::from_rotation_y(a.yaw[k]);
                 assert!(heading.lane(k).abs_diff_eq(yaw, 1e-6));
+            }
+        }
+    }
+
+    #[test]
+    fn level_poses_are_poses_without_pitch_or_roll() {
+        let mut rng = Rng::new(13, 14, 15);
+        let mut yaw = || Vec4::from_array(std::array::from_fn(|_| rng.range(-7.0, 7.0)));
+        for _ in 0..500 {
+            let (now, before) = (yaw(), yaw());
+            let level = |yaw| Attitudes {
+                yaw,
+                pitch: Vec4::ZERO,
+                roll: Vec4::ZERO,
+            };
+            for spin_dt in [None, Some(0.01)] {
+                let a = level_poses(now, || before, spin_dt);
+                let b = poses(&level(now), || level(before), spin_dt);
+                for (a, b) in a.iter().zip(&b) {
+                    // (Equal as values: a zero's sign may differ.)
+                    assert!(a.orientation == b.orientation && a.heading == b.heading);
+                    let w = a.angular_velocity_deg - b.angular_velocity_deg;
+                    assert!(w.length() <= 1e-4 * b.angular_velocity_deg.length().max(1.0));
+                }
             }
         }
     }

@@ -412,35 +412,11 @@ impl Flyer {
         Flyer { c, prev_yaw: c.yaw }
     }
 
-    /// The attitude of level flight along the heading (`Model::pose`): [`Flyer::poses`]'s.
-    pub fn pose(&self, spin_dt: Option<f32>) -> super::Pose {
-        Flyer::poses([self; 4], spin_dt)[0]
-    }
-
-    /// Four flyers' attitudes at once (`Model::poses`, by `super::attitudes`): the body
-    /// along the heading, `Ry(yaw)`, turning from `Ry(prev_yaw)`.
+    /// Four flyers' poses (`Model::poses`): level flight, the body along the heading,
+    /// turning from the heading one substep earlier.
     pub fn poses(flyers: [&Flyer; 4], spin_dt: Option<f32>) -> [super::Pose; 4] {
-        use super::attitudes::{Quat4, angular_velocities, sin_cos4};
-        let about_y = |yaw: [f32; 4]| {
-            let (s, c) = sin_cos4(glam::Vec4::from_array(yaw) * 0.5);
-            let zero = glam::Vec4::ZERO;
-            Quat4 {
-                x: zero,
-                y: s,
-                z: zero,
-                w: c,
-            }
-        };
-        let now = about_y(flyers.map(|f| f.c.yaw));
-        let spin = spin_dt.map_or([Vec3::ZERO; 4], |dt| {
-            let before = about_y(flyers.map(|f| f.prev_yaw));
-            angular_velocities(&before, &now, dt).map(|w| w * (180.0 / std::f32::consts::PI))
-        });
-        std::array::from_fn(|k| super::Pose {
-            orientation: now.lane(k),
-            heading: now.lane(k),
-            angular_velocity_deg: spin[k],
-        })
+        let yaw = |f: fn(&Flyer) -> f32| glam::Vec4::from_array(flyers.map(f));
+        super::attitudes::level_poses(yaw(|f| f.c.yaw), || yaw(|f| f.prev_yaw), spin_dt)
     }
 }
 

@@ -211,7 +211,7 @@ pub struct Pose {
     /// Heading only: rotation about world +Y.
     pub heading: Quat,
     /// Angular velocity over the last substep, degrees per second, world frame (zero
-    /// when not asked for: `Model::pose`).
+    /// when not asked for: `Model::poses`).
     pub angular_velocity_deg: Vec3,
 }
 
@@ -292,16 +292,12 @@ pub trait Model: Sized + Send + Sync {
     /// The agent's next state after one substep. `i` is its global index.
     fn step(&self, cx: &Context, i: usize, agent: &Self::Agent) -> Self::Agent;
 
-    /// The agent's attitude for the caches; its angular velocity over the last substep,
-    /// `spin_dt` seconds long, only when asked for (`None`: zero, and not worked out).
-    fn pose(&self, agent: &Self::Agent, spin_dt: Option<f32>) -> Pose;
-
-    /// Four agents' poses at once, as the recording pass asks for them (a model may work
-    /// them out in SIMD lanes, [`attitudes`]); by default [`Model::pose`] for each. Must
-    /// give what `pose` gives for each agent.
-    fn poses(&self, agents: [&Self::Agent; 4], spin_dt: Option<f32>) -> [Pose; 4] {
-        agents.map(|a| self.pose(a, spin_dt))
-    }
+    /// Four agents' attitudes for the caches (the recording pass asks in fours, a swarm's
+    /// last agent repeated to fill the last four); their angular velocities over the last
+    /// substep, `spin_dt` seconds long, only when asked for (`None`: zero, and not worked
+    /// out). Each agent's pose must depend on that agent alone. Models answer with
+    /// [`attitudes::poses`], four agents in SIMD lanes.
+    fn poses(&self, agents: [&Self::Agent; 4], spin_dt: Option<f32>) -> [Pose; 4];
 
     /// Writes one value per channel of `INFO.channels`.
     fn record(&self, agent: &Self::Agent, pose: &Pose, channels: &mut [f32]);

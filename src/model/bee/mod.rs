@@ -24,7 +24,7 @@ use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup, vision};
 use crate::field::CurlNoise;
 use crate::math::{self, Rng, normalize_or};
 use crate::species::{BEE_CHANNELS, HONEYBEE};
-use glam::{Quat, Vec3, Vec4};
+use glam::{Quat, Vec3};
 use kernels::Kernels;
 use oscillation::Phasor;
 
@@ -517,36 +517,19 @@ impl Model for BeeModel {
         out
     }
 
-    fn pose(&self, b: &Bee, spin_dt: Option<f32>) -> Pose {
-        self.poses([b; 4], spin_dt)[0]
-    }
-
     fn poses(&self, bees: [&Bee; 4], spin_dt: Option<f32>) -> [Pose; 4] {
-        // `attitude` four at a time (`attitudes`: the same bits on every CPU).
-        fn lanes(bees: [&Bee; 4], f: impl Fn(&Bee) -> f32) -> Vec4 {
-            Vec4::from_array(bees.map(f))
-        }
-        let now = Attitudes {
-            yaw: lanes(bees, |b| b.c.yaw),
-            pitch: lanes(bees, |b| b.pitch_deg.to_radians()),
-            roll: lanes(bees, |b| b.drawn_roll_deg.to_radians()),
-        };
-        let (orientation, heading) = attitudes::orientations(&now);
-        let spin = spin_dt.map_or([Vec3::ZERO; 4], |dt| {
-            let before = Attitudes {
-                yaw: lanes(bees, |b| b.prev_attitude.0),
-                pitch: lanes(bees, |b| b.prev_attitude.1.to_radians()),
-                roll: lanes(bees, |b| b.prev_attitude.2.to_radians()),
-            };
-            let from = attitudes::orientations(&before).0;
-            attitudes::angular_velocities(&from, &orientation, dt)
-                .map(|w| w * (180.0 / std::f32::consts::PI))
+        // The drawn body: Eq. 3's pitch about the climb, the drawn roll.
+        let now = Attitudes::of(bees, |b| {
+            let rad = f32::to_radians;
+            (b.c.yaw, rad(b.pitch_deg), rad(b.drawn_roll_deg))
         });
-        std::array::from_fn(|k| Pose {
-            orientation: orientation.lane(k),
-            heading: heading.lane(k),
-            angular_velocity_deg: spin[k],
-        })
+        let before = || {
+            Attitudes::of(bees, |b| {
+                let (yaw, pitch, roll) = b.prev_attitude;
+                (yaw, pitch.to_radians(), roll.to_radians())
+            })
+        };
+        attitudes::poses(&now, before, spin_dt)
     }
 
     fn record(&self, b: &Bee, pose: &Pose, channels: &mut [f32]) {

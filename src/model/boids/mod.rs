@@ -125,10 +125,6 @@ impl Model for BoidsModel {
         self.flight.fly(cx, b, a, a_col)
     }
 
-    fn pose(&self, b: &Flyer, spin_dt: Option<f32>) -> Pose {
-        b.pose(spin_dt)
-    }
-
     fn poses(&self, b: [&Flyer; 4], spin_dt: Option<f32>) -> [Pose; 4] {
         Flyer::poses(b, spin_dt)
     }

@@ -23,6 +23,7 @@ pub mod maneuvering;
 pub mod params;
 pub mod vortex;
 
+use super::attitudes::{self, Attitudes};
 use super::context::Context;
 use super::flight::{self, Avoidance, lag_blend};
 use super::{Agent, Model, ModelInfo, Pose, Start, SwarmSetup};
@@ -337,18 +338,14 @@ impl Model for ButterflyModel {
         }
     }
 
-    fn pose(&self, b: &Butterfly, spin_dt: Option<f32>) -> Pose {
-        let pitch = maneuvering::angle(Angle::Pitch, b.s, b.pitch_phase);
-        let orientation = Self::orientation(b.yaw, pitch);
-        Pose {
-            orientation,
-            heading: Quat::from_rotation_y(b.yaw),
-            angular_velocity_deg: math::spin_deg(
-                spin_dt,
-                || Self::orientation(b.prev_yaw, b.prev_pitch),
-                orientation,
-            ),
-        }
+    fn poses(&self, flyers: [&Butterfly; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        // Body → world: heading, then the thorax pitch θ_β.
+        let now = Attitudes::of(flyers, |b| {
+            let pitch = maneuvering::angle(Angle::Pitch, b.s, b.pitch_phase);
+            (b.yaw, pitch.to_radians(), 0.0)
+        });
+        let before = || Attitudes::of(flyers, |b| (b.prev_yaw, b.prev_pitch.to_radians(), 0.0));
+        attitudes::poses(&now, before, spin_dt)
     }
 
     fn record(&self, b: &Butterfly, _: &Pose, channels: &mut [f32]) {

@@ -297,10 +297,6 @@ impl Model for FastswarmModel {
         }
     }
 
-    fn pose(&self, b: &Insect, spin_dt: Option<f32>) -> Pose {
-        b.fly.pose(spin_dt)
-    }
-
     fn poses(&self, b: [&Insect; 4], spin_dt: Option<f32>) -> [Pose; 4] {
         Flyer::poses(b.map(|b| &b.fly), spin_dt)
     }

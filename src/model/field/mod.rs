@@ -17,6 +17,7 @@ pub mod noise_field;
 pub mod params;
 pub mod path_field;
 
+use super::attitudes::{self, Attitudes};
 use super::context::Context;
 use super::flight;
 use super::targets::TargetKind;
@@ -289,13 +290,10 @@ impl Model for FieldModel {
         }
     }
 
-    fn pose(&self, a: &Insect, spin_dt: Option<f32>) -> Pose {
-        let orientation = a.attitude.orientation();
-        Pose {
-            orientation,
-            heading: glam::Quat::from_rotation_y(a.attitude.yaw),
-            angular_velocity_deg: math::spin_deg(spin_dt, || a.prev.orientation(), orientation),
-        }
+    fn poses(&self, insects: [&Insect; 4], spin_dt: Option<f32>) -> [Pose; 4] {
+        let of = |a: &Attitude| (a.yaw, a.pitch, a.roll);
+        let now = Attitudes::of(insects, |i| of(&i.attitude));
+        attitudes::poses(&now, || Attitudes::of(insects, |i| of(&i.prev)), spin_dt)
     }
 
     fn record(&self, a: &Insect, _: &Pose, out: &mut [f32]) {

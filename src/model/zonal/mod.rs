@@ -298,10 +298,6 @@ impl Model for ZonalModel {
         }
     }
 
-    fn pose(&self, a: &Insect, spin_dt: Option<f32>) -> Pose {
-        a.f.pose(spin_dt)
-    }
-
     fn poses(&self, a: [&Insect; 4], spin_dt: Option<f32>) -> [Pose; 4] {
         Flyer::poses(a.map(|a| &a.f), spin_dt)
     }
