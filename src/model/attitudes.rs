@@ -3,8 +3,9 @@
 //! glam quaternions, x y z w) and the angular velocity between two attitudes (as
 //! [`crate::math::angular_velocity`]), each lane of a `Vec4` one body.
 //!
-//! Why: a pose took six `sincosf` and an `atan2f` from the C library, a sixth of a sparse
-//! bee-step's time at four substeps a frame (docs/model.md, "Performance"). Here the sines
+//! Why: a bee's pose took six `sincosf` and an `atan2f` from the C library, about 8 % of a
+//! sparse bench's time at four substeps a frame (docs/model.md, "Poses four at a time"),
+//! and lanes, not a cheaper polynomial alone, are what cut that. Here the sines
 //! and cosines are a polynomial four lanes wide, and `atan2` is [`crate::math::atan2`]'s
 //! polynomial lane by lane. Only IEEE additions, multiplications, divisions and square
 //! roots, each rounded once (no fused multiply-add), so every CPU and every SIMD level
