@@ -341,6 +341,42 @@ mod tests {
     }
 
     #[test]
+    fn a_pose_depends_on_its_own_lane_alone() {
+        // The recording groups agents in fours (a swarm's last agent repeated): whatever
+        // shares its four, an agent's pose must be the same bits.
+        let mut rng = Rng::new(16, 17, 18);
+        let mut angles = || std::array::from_fn::<f32, 12, _>(|_| rng.range(-3.0, 3.0));
+        for _ in 0..500 {
+            let (now, before) = (angles(), angles());
+            let lanes = |a: [f32; 12], order: [usize; 4]| Attitudes {
+                yaw: Vec4::from_array(order.map(|k| a[k])),
+                pitch: Vec4::from_array(order.map(|k| a[4 + k])),
+                roll: Vec4::from_array(order.map(|k| a[8 + k])),
+            };
+            let bits = |p: &Pose| {
+                let (o, h, w) = (p.orientation, p.heading, p.angular_velocity_deg);
+                [o.x, o.y, o.z, o.w, h.x, h.y, h.z, h.w, w.x, w.y, w.z].map(f32::to_bits)
+            };
+            let dt = Some(1.0 / 96.0);
+            let together = poses(
+                &lanes(now, [0, 1, 2, 3]),
+                || lanes(before, [0, 1, 2, 3]),
+                dt,
+            );
+            for (k, pose) in together.iter().enumerate() {
+                let alone = poses(&lanes(now, [k; 4]), || lanes(before, [k; 4]), dt);
+                let moved = poses(
+                    &lanes(now, [3, k, 0, 1]),
+                    || lanes(before, [3, k, 0, 1]),
+                    dt,
+                );
+                assert_eq!(bits(pose), bits(&alone[0]));
+                assert_eq!(bits(pose), bits(&moved[1]));
+            }
+        }
+    }
+
+    #[test]
     fn level_poses_are_poses_without_pitch_or_roll() {
         let mut rng = Rng::new(13, 14, 15);
         let mut yaw = || Vec4::from_array(std::array::from_fn(|_| rng.range(-7.0, 7.0)));
