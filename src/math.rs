@@ -145,7 +145,9 @@ pub fn wrap_tau(a: f32) -> f32 {
     }
 }
 
-/// Angular velocity (rad/s, world frame) taking `from` to `to` in `dt` seconds.
+/// Angular velocity (rad/s, world frame) taking `from` to `to` in `dt` seconds, one pair
+/// at a time: the reference `model::attitudes` (which the caches use) is tested against.
+#[cfg(test)]
 pub fn angular_velocity(from: Quat, to: Quat, dt: f32) -> Vec3 {
     let mut d = to * from.inverse();
     if d.w < 0.0 {

@@ -5,7 +5,7 @@
 //! Radians; yaw about world +Y, positive roll drops the right wing (docs/model.md).
 
 use crate::math;
-use glam::{Quat, Vec3};
+use glam::Vec3;
 
 /// Steepest climb or dive the body shows, radians.
 const PITCH_MAX: f32 = 1.0;
@@ -72,8 +72,9 @@ impl Attitude {
         }
     }
 
-    /// Body → world.
-    pub fn orientation(&self) -> Quat {
+    /// Body → world (the recording works it out four at a time: `Model::poses`).
+    #[cfg(test)]
+    pub fn orientation(&self) -> glam::Quat {
         math::body_orientation(self.yaw, self.pitch, self.roll)
     }
 }
