@@ -1784,7 +1784,15 @@ impl Scan<'_> {
         };
         let mut w = 0;
         if kept.count_ones() as usize == k {
-            // In place: the write position never passes the read position.
+            // In place: the write position never passes the read position. A group of
+            // lanes at a time where the CPU has them (a crowd's query keeps 16 of 20–40).
+            #[cfg(target_arch = "x86_64")]
+            match self.lanes {
+                // SAFETY (both): a width only where the CPU has it (`Lanes::of_cpu`).
+                Lanes::Sixteen => return unsafe { compact_wide(found, &d2, n, kept) },
+                Lanes::Eight => return unsafe { compact8(found, &d2, n, kept) },
+                Lanes::Four => {}
+            }
             for (r, &d) in d2[..n].iter().enumerate() {
                 found.slots[w] = found.slots[r];
                 found.d2[w] = d;
@@ -1804,6 +1812,71 @@ impl Scan<'_> {
         }
         found.len = w;
     }
+}
+
+/// Keeps in `found` the first `n` candidates whose bit is set in `kept`, in their order,
+/// with their squared distances `d2`, eight at a time with AVX2 (a permute from
+/// `PACKED8`), in place: each group is read before any write reaches it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn compact8(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: u64) {
+    use std::arch::x86_64::*;
+    assert!(n <= COLLECT);
+    let (mut w, mut g) = (0, 0);
+    while g < n {
+        let keep = ((kept >> g) as u32 & 0xFF) & ((1u32 << (n - g).min(NARROW_LANES)) - 1);
+        // SAFETY: g < n ≤ COLLECT, a multiple of eight, so eight entries from g lie in
+        // `d2` (COLLECT + LANES) and `found.slots`, and eight from w ≤ g in both of found's
+        // buffers (COLLECT + WIDE_LANES); PACKED8's rows are eight bytes.
+        unsafe {
+            let order =
+                _mm256_cvtepu8_epi32(_mm_loadl_epi64(PACKED8[keep as usize].as_ptr().cast()));
+            let slots = _mm256_loadu_si256(found.slots.as_ptr().add(g).cast());
+            let dists = _mm256_loadu_ps(d2.as_ptr().add(g));
+            _mm256_storeu_si256(
+                found.slots.as_mut_ptr().add(w).cast(),
+                _mm256_permutevar8x32_epi32(slots, order),
+            );
+            _mm256_storeu_ps(
+                found.d2.as_mut_ptr().add(w),
+                _mm256_permutevar8x32_ps(dists, order),
+            );
+        }
+        w += keep.count_ones() as usize;
+        g += NARROW_LANES;
+    }
+    found.len = w;
+}
+
+/// [`compact8`] sixteen at a time with AVX-512's compress.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn compact_wide(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: u64) {
+    use std::arch::x86_64::*;
+    assert!(n <= COLLECT);
+    let (mut w, mut g) = (0, 0);
+    while g < n {
+        let all = ((1u32 << (n - g).min(WIDE_LANES)) - 1) as u16;
+        let keep = (kept >> g) as u16 & all;
+        // SAFETY: g < n ≤ COLLECT, a multiple of sixteen, so sixteen entries from g lie in
+        // `d2` (COLLECT + LANES) and `found.slots`, and sixteen from w ≤ g in both of
+        // found's buffers (COLLECT + WIDE_LANES).
+        unsafe {
+            let slots = _mm512_loadu_si512(found.slots.as_ptr().add(g).cast());
+            let dists = _mm512_loadu_ps(d2.as_ptr().add(g));
+            _mm512_storeu_si512(
+                found.slots.as_mut_ptr().add(w).cast(),
+                _mm512_maskz_compress_epi32(keep, slots),
+            );
+            _mm512_storeu_ps(
+                found.d2.as_mut_ptr().add(w),
+                _mm512_maskz_compress_ps(keep, dists),
+            );
+        }
+        w += keep.count_ones() as usize;
+        g += WIDE_LANES;
+    }
+    found.len = w;
 }
 
 /// Candidates up to which `Scan::keep_nearest` ranks them (beyond, it selects).
