@@ -1559,14 +1559,8 @@ impl Scan<'_> {
             let own = self.skip_slot.wrapping_sub(l as u32);
             hits &= !(((own < WIDE_LANES as u32) as u16) << (own & 15));
             let places = _mm512_add_epi32(_mm512_set1_epi32(l as i32), lane);
-            let packed = _mm512_maskz_compress_epi32(hits, places);
-            let out = &mut found.slots[found.len..found.len + WIDE_LANES];
-            // SAFETY: `out` holds sixteen u32s, the store's width.
-            unsafe { _mm512_storeu_si512(out.as_mut_ptr().cast(), packed) };
-            let out = &mut found.d2[found.len..found.len + WIDE_LANES];
-            // SAFETY: `out` holds sixteen f32s, the store's width.
-            unsafe { _mm512_storeu_ps(out.as_mut_ptr(), _mm512_maskz_compress_ps(hits, d2)) };
-            found.len += hits.count_ones() as usize;
+            // found.len ≤ COLLECT − WIDE_LANES (cut above).
+            found.len = pack16(found, found.len, hits, places, d2);
             l += WIDE_LANES;
         }
     }
@@ -1659,24 +1653,9 @@ impl Scan<'_> {
             let mut hits = near & ((1u32 << left) - 1);
             let own = self.skip_slot.wrapping_sub(l as u32);
             hits &= !(((own < NARROW_LANES as u32) as u32) << (own & 7));
-            // SAFETY: PACKED8's rows are eight bytes.
-            let order = _mm256_cvtepu8_epi32(unsafe {
-                _mm_loadl_epi64(PACKED8[hits as usize].as_ptr().cast())
-            });
             let places = _mm256_add_epi32(_mm256_set1_epi32(l as i32), lane);
-            // SAFETY: len ≤ COLLECT − NARROW_LANES (cut above), so eight entries from len
-            // fit in both buffers of COLLECT + WIDE_LANES.
-            unsafe {
-                _mm256_storeu_si256(
-                    found.slots.as_mut_ptr().add(len).cast(),
-                    _mm256_permutevar8x32_epi32(places, order),
-                );
-                _mm256_storeu_ps(
-                    found.d2.as_mut_ptr().add(len),
-                    _mm256_permutevar8x32_ps(d2, order),
-                );
-            }
-            len += hits.count_ones() as usize;
+            // len ≤ COLLECT − NARROW_LANES (cut above).
+            len = pack8(found, len, hits, places, d2);
             l += NARROW_LANES;
         }
         found.len = len;
@@ -1814,6 +1793,65 @@ impl Scan<'_> {
     }
 }
 
+/// Writes the lanes of `slots` and `d2` set in `lanes` (eight bits) into `found`'s buffers
+/// from entry `at` on, in lane order (a permute from `PACKED8`: AVX2 has no compress), and
+/// returns `at` plus how many. All eight lanes are written: `at` must be at most
+/// `COLLECT` (the buffers hold `WIDE_LANES` more).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn pack8(
+    found: &mut Found,
+    at: usize,
+    lanes: u32,
+    slots: std::arch::x86_64::__m256i,
+    d2: std::arch::x86_64::__m256,
+) -> usize {
+    use std::arch::x86_64::*;
+    assert!(at <= COLLECT && lanes < 256);
+    // SAFETY: PACKED8's rows are eight bytes; eight entries from at ≤ COLLECT fit in
+    // buffers of COLLECT + WIDE_LANES.
+    unsafe {
+        let order = _mm256_cvtepu8_epi32(_mm_loadl_epi64(PACKED8[lanes as usize].as_ptr().cast()));
+        _mm256_storeu_si256(
+            found.slots.as_mut_ptr().add(at).cast(),
+            _mm256_permutevar8x32_epi32(slots, order),
+        );
+        _mm256_storeu_ps(
+            found.d2.as_mut_ptr().add(at),
+            _mm256_permutevar8x32_ps(d2, order),
+        );
+    }
+    at + lanes.count_ones() as usize
+}
+
+/// [`pack8`] for sixteen lanes with AVX-512's compress.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn pack16(
+    found: &mut Found,
+    at: usize,
+    lanes: u16,
+    slots: std::arch::x86_64::__m512i,
+    d2: std::arch::x86_64::__m512,
+) -> usize {
+    use std::arch::x86_64::*;
+    assert!(at <= COLLECT);
+    // SAFETY: sixteen entries from at ≤ COLLECT fit in buffers of COLLECT + WIDE_LANES.
+    unsafe {
+        _mm512_storeu_si512(
+            found.slots.as_mut_ptr().add(at).cast(),
+            _mm512_maskz_compress_epi32(lanes, slots),
+        );
+        _mm512_storeu_ps(
+            found.d2.as_mut_ptr().add(at),
+            _mm512_maskz_compress_ps(lanes, d2),
+        );
+    }
+    at + lanes.count_ones() as usize
+}
+
 /// Keeps in `found` the first `n` candidates whose bit is set in `kept`, in their order,
 /// with their squared distances `d2`, eight at a time with AVX2 (a permute from
 /// `PACKED8`), in place: each group is read before any write reaches it.
@@ -1826,23 +1864,15 @@ fn compact8(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: u64)
     while g < n {
         let keep = ((kept >> g) as u32 & 0xFF) & ((1u32 << (n - g).min(NARROW_LANES)) - 1);
         // SAFETY: g < n ≤ COLLECT, a multiple of eight, so eight entries from g lie in
-        // `d2` (COLLECT + LANES) and `found.slots`, and eight from w ≤ g in both of found's
-        // buffers (COLLECT + WIDE_LANES); PACKED8's rows are eight bytes.
-        unsafe {
-            let order =
-                _mm256_cvtepu8_epi32(_mm_loadl_epi64(PACKED8[keep as usize].as_ptr().cast()));
-            let slots = _mm256_loadu_si256(found.slots.as_ptr().add(g).cast());
-            let dists = _mm256_loadu_ps(d2.as_ptr().add(g));
-            _mm256_storeu_si256(
-                found.slots.as_mut_ptr().add(w).cast(),
-                _mm256_permutevar8x32_epi32(slots, order),
-            );
-            _mm256_storeu_ps(
-                found.d2.as_mut_ptr().add(w),
-                _mm256_permutevar8x32_ps(dists, order),
-            );
-        }
-        w += keep.count_ones() as usize;
+        // `d2` (COLLECT + LANES) and `found.slots`.
+        let (slots, dists) = unsafe {
+            (
+                _mm256_loadu_si256(found.slots.as_ptr().add(g).cast()),
+                _mm256_loadu_ps(d2.as_ptr().add(g)),
+            )
+        };
+        // w ≤ g < COLLECT.
+        w = pack8(found, w, keep, slots, dists);
         g += NARROW_LANES;
     }
     found.len = w;
@@ -1859,21 +1889,15 @@ fn compact_wide(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: 
         let all = ((1u32 << (n - g).min(WIDE_LANES)) - 1) as u16;
         let keep = (kept >> g) as u16 & all;
         // SAFETY: g < n ≤ COLLECT, a multiple of sixteen, so sixteen entries from g lie in
-        // `d2` (COLLECT + LANES) and `found.slots`, and sixteen from w ≤ g in both of
-        // found's buffers (COLLECT + WIDE_LANES).
-        unsafe {
-            let slots = _mm512_loadu_si512(found.slots.as_ptr().add(g).cast());
-            let dists = _mm512_loadu_ps(d2.as_ptr().add(g));
-            _mm512_storeu_si512(
-                found.slots.as_mut_ptr().add(w).cast(),
-                _mm512_maskz_compress_epi32(keep, slots),
-            );
-            _mm512_storeu_ps(
-                found.d2.as_mut_ptr().add(w),
-                _mm512_maskz_compress_ps(keep, dists),
-            );
-        }
-        w += keep.count_ones() as usize;
+        // `d2` (COLLECT + LANES) and `found.slots`.
+        let (slots, dists) = unsafe {
+            (
+                _mm512_loadu_si512(found.slots.as_ptr().add(g).cast()),
+                _mm512_loadu_ps(d2.as_ptr().add(g)),
+            )
+        };
+        // w ≤ g < COLLECT.
+        w = pack16(found, w, keep, slots, dists);
         g += WIDE_LANES;
     }
     found.len = w;
