@@ -806,6 +806,88 @@ impl Grid {
         scan.collect_rows(&rows[..m], r2, found);
     }
 
+    /// Eight rows of cells along x around cell `c`, at y offsets `offsets[0]` and z offsets
+    /// `offsets[1]`, one per lane, with AVX2: whether each lies in the grid (all ones),
+    /// its slab's squared distance `dz2[dz + 1] + dy2[dy + 1]` (`slabs_around`), and its
+    /// index (a row outside the grid clamped into it: read, then dropped).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn rows8(
+        &self,
+        c: IVec3,
+        (dz2, dy2): ([f32; 3], [f32; 3]),
+        offsets: &[[i32; 8]; 2],
+    ) -> (
+        std::arch::x86_64::__m256i,
+        std::arch::x86_64::__m256,
+        std::arch::x86_64::__m256i,
+    ) {
+        use std::arch::x86_64::*;
+        let (d, int) = (self.dims, _mm256_set1_epi32);
+        // SAFETY (the loads): each array holds eight lanes.
+        let (dy, dz) = unsafe {
+            (
+                _mm256_loadu_si256(offsets[0].as_ptr().cast()),
+                _mm256_loadu_si256(offsets[1].as_ptr().cast()),
+            )
+        };
+        let (y, z) = (
+            _mm256_add_epi32(int(c.y), dy),
+            _mm256_add_epi32(int(c.z), dz),
+        );
+        let within = |v, n| {
+            _mm256_and_si256(
+                _mm256_cmpgt_epi32(v, int(-1)),
+                _mm256_cmpgt_epi32(int(n), v),
+            )
+        };
+        let inside = _mm256_and_si256(within(y, d.y), within(z, d.z));
+        let table = |t: [f32; 3]| _mm256_setr_ps(t[0], t[1], t[2], 0.0, 0.0, 0.0, 0.0, 0.0);
+        let dyz2 = _mm256_add_ps(
+            _mm256_permutevar8x32_ps(table(dz2), _mm256_add_epi32(dz, int(1))),
+            _mm256_permutevar8x32_ps(table(dy2), _mm256_add_epi32(dy, int(1))),
+        );
+        let clamp = |v, hi| _mm256_min_epi32(_mm256_max_epi32(v, int(0)), int(hi));
+        let row = _mm256_mullo_epi32(
+            int(d.x),
+            _mm256_add_epi32(
+                clamp(y, d.y - 1),
+                _mm256_mullo_epi32(int(d.y), clamp(z, d.z - 1)),
+            ),
+        );
+        (inside, dyz2, row)
+    }
+
+    /// The starts and ends in the sorted arrays of the runs of cells `a..=b` (each in
+    /// `0..d.x`) along the rows `row` ([`Grid::rows8`]), gathered with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn runs8(
+        &self,
+        row: std::arch::x86_64::__m256i,
+        a: std::arch::x86_64::__m256i,
+        b: std::arch::x86_64::__m256i,
+    ) -> (std::arch::x86_64::__m256i, std::arch::x86_64::__m256i) {
+        use std::arch::x86_64::*;
+        let d = self.dims;
+        assert_eq!(self.starts.len(), (d.x * d.y * d.z) as usize + 1);
+        // SAFETY: rows lie in the grid (`rows8` clamps them) and a ≤ b ≤ d.x − 1 (the
+        // callers' clamps), so every index is at most d.x·d.y·d.z, within `starts`
+        // (asserted above).
+        unsafe {
+            let at = |i| _mm256_i32gather_epi32::<4>(self.starts.as_ptr().cast(), i);
+            (
+                at(_mm256_add_epi32(row, a)),
+                at(_mm256_add_epi32(
+                    _mm256_add_epi32(row, b),
+                    _mm256_set1_epi32(1),
+                )),
+            )
+        }
+    }
+
     /// [`Grid::walk_cube`] with AVX2: its first eight rows in eight lanes (the row index,
     /// whether it lies in the grid, its slab distance, its start and end gathered), the
     /// ninth as there. The same rows in the same order, the same count for the guess, so
@@ -822,51 +904,9 @@ impl Grid {
         let (dz2, dy2) = self.slabs_around(p, c);
         let int = _mm256_set1_epi32;
         // `walk_cube`'s rows, z outer and y inner, but for the last (dy, dz) = (1, 1).
-        const DY: [i32; 8] = [-1, 0, 1, -1, 0, 1, -1, 0];
-        const DZ: [i32; 8] = [-1, -1, -1, 0, 0, 0, 1, 1];
-        // SAFETY (the loads): each array holds eight lanes.
-        let (dy, dz) = unsafe {
-            (
-                _mm256_loadu_si256(DY.as_ptr().cast()),
-                _mm256_loadu_si256(DZ.as_ptr().cast()),
-            )
-        };
-        let (y, z) = (
-            _mm256_add_epi32(int(c.y), dy),
-            _mm256_add_epi32(int(c.z), dz),
-        );
-        let within = |v, n| {
-            _mm256_and_si256(
-                _mm256_cmpgt_epi32(v, int(-1)),
-                _mm256_cmpgt_epi32(int(n), v),
-            )
-        };
-        let inside = _mm256_and_si256(within(y, d.y), within(z, d.z));
-        // dz2[dz + 1] + dy2[dy + 1], lane by lane.
-        let table = |t: [f32; 3]| _mm256_setr_ps(t[0], t[1], t[2], 0.0, 0.0, 0.0, 0.0, 0.0);
-        let slab = _mm256_add_ps(
-            _mm256_permutevar8x32_ps(table(dz2), _mm256_add_epi32(dz, int(1))),
-            _mm256_permutevar8x32_ps(table(dy2), _mm256_add_epi32(dy, int(1))),
-        );
-        // Rows outside the grid are read at a clamped row (within `starts`), then dropped.
-        let clamp = |v, hi| _mm256_min_epi32(_mm256_max_epi32(v, int(0)), int(hi));
-        let row = _mm256_mullo_epi32(
-            int(d.x),
-            _mm256_add_epi32(
-                clamp(y, d.y - 1),
-                _mm256_mullo_epi32(int(d.y), clamp(z, d.z - 1)),
-            ),
-        );
-        assert_eq!(self.starts.len(), (d.x * d.y * d.z) as usize + 1);
-        // SAFETY: rows are clamped into the grid and x0 ≤ x1 ≤ d.x − 1, so every index is
-        // at most d.x·d.y·d.z, within `starts` (asserted above).
-        let (s, e) = unsafe {
-            let at = |i| _mm256_i32gather_epi32::<4>(self.starts.as_ptr().cast(), i);
-            (
-                at(_mm256_add_epi32(row, int(x0 as i32))),
-                at(_mm256_add_epi32(row, int(x1 as i32 + 1))),
-            )
-        };
+        const OFFSETS: [[i32; 8]; 2] = [[-1, 0, 1, -1, 0, 1, -1, 0], [-1, -1, -1, 0, 0, 0, 1, 1]];
+        let (inside, slab, row) = self.rows8(c, (dz2, dy2), &OFFSETS);
+        let (s, e) = self.runs8(row, int(x0 as i32), int(x1 as i32));
         let (mut starts, mut ends, mut slabs) = ([0u32; 9], [0u32; 9], [0.0f32; 9]);
         // SAFETY: each array holds at least eight lanes.
         unsafe {
@@ -1059,48 +1099,21 @@ impl Grid {
             // Ring 1's rows would be listed only to be dropped.
             return;
         }
-        let int = _mm256_set1_epi32;
         // `NEAR_ROWS[1..]`, lane by lane: y and z offsets.
-        const DY: [i32; 8] = [-1, 0, 1, -1, 1, -1, 0, 1];
-        const DZ: [i32; 8] = [-1, -1, -1, 0, 0, 1, 1, 1];
+        const OFFSETS: [[i32; 8]; 2] = [[-1, 0, 1, -1, 1, -1, 0, 1], [-1, -1, -1, 0, 0, 1, 1, 1]];
         const {
             let mut l = 0;
             while l < 8 {
-                assert!(NEAR_ROWS[l + 1].0 == DY[l] && NEAR_ROWS[l + 1].1 == DZ[l]);
+                assert!(NEAR_ROWS[l + 1].0 == OFFSETS[0][l] && NEAR_ROWS[l + 1].1 == OFFSETS[1][l]);
                 l += 1;
             }
         }
-        // SAFETY (the loads): each array holds eight lanes.
-        let (dy, dz) = unsafe {
-            (
-                _mm256_loadu_si256(DY.as_ptr().cast()),
-                _mm256_loadu_si256(DZ.as_ptr().cast()),
-            )
-        };
-        let (y, z) = (
-            _mm256_add_epi32(int(c.y), dy),
-            _mm256_add_epi32(int(c.z), dz),
-        );
-        let within = |v, n| {
-            _mm256_and_si256(
-                _mm256_cmpgt_epi32(v, int(-1)),
-                _mm256_cmpgt_epi32(int(n), v),
-            )
-        };
-        let inside = _mm256_and_si256(within(y, d.y), within(z, d.z));
-        // dz2[dz + 1] + dy2[dy + 1], lane by lane.
-        let table = |t: [f32; 3]| _mm256_setr_ps(t[0], t[1], t[2], 0.0, 0.0, 0.0, 0.0, 0.0);
-        let dyz2 = _mm256_add_ps(
-            _mm256_permutevar8x32_ps(table(dz2), _mm256_add_epi32(dz, int(1))),
-            _mm256_permutevar8x32_ps(table(dy2), _mm256_add_epi32(dy, int(1))),
-        );
+        let (inside, dyz2, row) = self.rows8(c, (dz2, dy2), &OFFSETS);
         let r2v = _mm256_set1_ps(r2);
         let near = _mm256_cmp_ps::<_CMP_LT_OQ>(dyz2, r2v);
         let keep = _mm256_movemask_ps(_mm256_and_ps(_mm256_castsi256_ps(inside), near));
         let zero = _mm256_setzero_ps();
         let w = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(r2v, dyz2), zero));
-        let clamp = |v, hi| _mm256_min_epi32(_mm256_max_epi32(v, int(0)), int(hi));
-        let (y, z) = (clamp(y, d.y - 1), clamp(z, d.z - 1));
         // `chord`.
         let (px, ox) = (_mm256_set1_ps(p.x), _mm256_set1_ps(o.x));
         let (inv, last) = (
@@ -1112,20 +1125,7 @@ impl Grid {
             _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, zero), last))
         };
         let (a, b) = (cell_x(_mm256_sub_ps(px, w)), cell_x(_mm256_add_ps(px, w)));
-        let row = _mm256_mullo_epi32(
-            int(d.x),
-            _mm256_add_epi32(y, _mm256_mullo_epi32(int(d.y), z)),
-        );
-        assert_eq!(self.starts.len(), (d.x * d.y * d.z) as usize + 1);
-        // SAFETY: y and z are clamped into the grid and a ≤ b ≤ d.x − 1, so every index
-        // is at most d.x·d.y·d.z, within `starts` (asserted above).
-        let (s, e) = unsafe {
-            let at = |i| _mm256_i32gather_epi32::<4>(self.starts.as_ptr().cast(), i);
-            (
-                at(_mm256_add_epi32(row, a)),
-                at(_mm256_add_epi32(_mm256_add_epi32(row, b), int(1))),
-            )
-        };
+        let (s, e) = self.runs8(row, a, b);
         let (mut starts, mut ends) = ([0u32; 8], [0u32; 8]);
         // SAFETY: each array holds eight u32s.
         unsafe {
