@@ -907,30 +907,37 @@ impl Grid {
         const OFFSETS: [[i32; 8]; 2] = [[-1, 0, 1, -1, 0, 1, -1, 0], [-1, -1, -1, 0, 0, 0, 1, 1]];
         let (inside, slab, row) = self.rows8(c, (dz2, dy2), &OFFSETS);
         let (s, e) = self.runs8(row, int(x0 as i32), int(x1 as i32));
-        let (mut starts, mut ends, mut slabs) = ([0u32; 9], [0u32; 9], [0.0f32; 9]);
+        let (mut starts, mut ends) = ([0u32; 9], [0u32; 9]);
         // SAFETY: each array holds at least eight lanes.
         unsafe {
             _mm256_storeu_si256(starts.as_mut_ptr().cast(), s);
             _mm256_storeu_si256(ends.as_mut_ptr().cast(), e);
-            _mm256_storeu_ps(slabs.as_mut_ptr(), slab);
         }
         let mut rows = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32;
         // The ninth row, (dy, dz) = (1, 1).
         if c.y + 1 < d.y && c.z + 1 < d.z {
             let row = (d.x * (c.y + 1 + d.y * (c.z + 1))) as usize;
             (starts[8], ends[8]) = (self.starts[row + x0], self.starts[row + x1 + 1]);
-            slabs[8] = dz2[2] + dy2[2];
             rows |= 1 << 8;
         }
-        let mut count = 0;
-        for l in 0..9 {
-            count += (ends[l] - starts[l]) * ((rows >> l) & 1);
-        }
+        let slab8 = dz2[2] + dy2[2];
+        // Σ (end − start) over the rows in the grid: the first eight in lanes.
+        let lengths = _mm256_and_si256(_mm256_sub_epi32(e, s), inside);
+        let sum = _mm_add_epi32(
+            _mm256_castsi256_si128(lengths),
+            _mm256_extracti128_si256::<1>(lengths),
+        );
+        let sum = _mm_add_epi32(sum, _mm_unpackhi_epi64(sum, sum));
+        let sum = _mm_add_epi32(sum, _mm_shuffle_epi32::<0b01>(sum));
+        let count = _mm_cvtsi128_si32(sum) as u32 + (ends[8] - starts[8]) * (rows >> 8);
         let cells = ((x1 - x0 + 1) as u32 * rows.count_ones()) as f32 / self.split as f32;
+        // The rows in the grid whose slab lies within r2, in order.
         let collect = |r2: f32, found: &mut Found| {
+            let near = _mm256_cmp_ps::<_CMP_LT_OQ>(slab, _mm256_set1_ps(r2));
+            let keep = rows & (_mm256_movemask_ps(near) as u32 | ((slab8 < r2) as u32) << 8);
             let mut runs = Runs::new();
             for l in 0..9 {
-                runs.put((starts[l], ends[l]), (rows >> l) & 1 != 0 && slabs[l] < r2);
+                runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
             }
             runs.flush(scan, r2, found);
         };
@@ -1664,8 +1671,9 @@ impl Scan<'_> {
             let own = self.skip_slot.wrapping_sub(l as u32);
             hits &= !(((own < WIDE_LANES as u32) as u16) << (own & 15));
             let places = _mm512_add_epi32(_mm512_set1_epi32(l as i32), lane);
-            // found.len ≤ COLLECT − WIDE_LANES (cut above).
-            found.len = pack16(found, found.len, hits, places, d2);
+            // SAFETY: found.len ≤ COLLECT − WIDE_LANES (cut above); AVX-512 F is this
+            // function's own target.
+            found.len = unsafe { pack16(found, found.len, hits, places, d2) };
             l += WIDE_LANES;
         }
     }
@@ -1759,8 +1767,9 @@ impl Scan<'_> {
             let own = self.skip_slot.wrapping_sub(l as u32);
             hits &= !(((own < NARROW_LANES as u32) as u32) << (own & 7));
             let places = _mm256_add_epi32(_mm256_set1_epi32(l as i32), lane);
-            // len ≤ COLLECT − NARROW_LANES (cut above).
-            len = pack8(found, len, hits, places, d2);
+            // SAFETY: len ≤ COLLECT − NARROW_LANES (cut above); AVX2 is this function's
+            // own target.
+            len = unsafe { pack8(found, len, hits as u8, places, d2) };
             l += NARROW_LANES;
         }
         found.len = len;
@@ -1898,24 +1907,28 @@ impl Scan<'_> {
     }
 }
 
-/// Writes the lanes of `slots` and `d2` set in `lanes` (eight bits) into `found`'s buffers
-/// from entry `at` on, in lane order (a permute from `PACKED8`: AVX2 has no compress), and
-/// returns `at` plus how many. All eight lanes are written: `at` must be at most
-/// `COLLECT` (the buffers hold `WIDE_LANES` more).
+/// Writes the lanes of `slots` and `d2` set in `lanes` into `found`'s buffers from entry
+/// `at` on, in lane order (a permute from `PACKED8`: AVX2 has no compress), and returns
+/// `at` plus how many. All eight lanes are written.
+///
+/// # Safety
+/// `at` ≤ `COLLECT` (the buffers hold `WIDE_LANES` more), and the CPU has AVX2. (Unsafe
+/// rather than checked: a check here cost 16 instructions a sparse query, in its hottest
+/// loop, whose callers bound `at` already.)
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn pack8(
+unsafe fn pack8(
     found: &mut Found,
     at: usize,
-    lanes: u32,
+    lanes: u8,
     slots: std::arch::x86_64::__m256i,
     d2: std::arch::x86_64::__m256,
 ) -> usize {
     use std::arch::x86_64::*;
-    assert!(at <= COLLECT && lanes < 256);
-    // SAFETY: PACKED8's rows are eight bytes; eight entries from at ≤ COLLECT fit in
-    // buffers of COLLECT + WIDE_LANES.
+    debug_assert!(at <= COLLECT);
+    // SAFETY: PACKED8's rows are eight bytes; eight entries from at ≤ COLLECT (the
+    // caller's promise) fit in buffers of COLLECT + WIDE_LANES.
     unsafe {
         let order = _mm256_cvtepu8_epi32(_mm_loadl_epi64(PACKED8[lanes as usize].as_ptr().cast()));
         _mm256_storeu_si256(
@@ -1931,10 +1944,13 @@ fn pack8(
 }
 
 /// [`pack8`] for sixteen lanes with AVX-512's compress.
+///
+/// # Safety
+/// As [`pack8`], and the CPU has AVX-512 F.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
-fn pack16(
+unsafe fn pack16(
     found: &mut Found,
     at: usize,
     lanes: u16,
@@ -1942,8 +1958,9 @@ fn pack16(
     d2: std::arch::x86_64::__m512,
 ) -> usize {
     use std::arch::x86_64::*;
-    assert!(at <= COLLECT);
-    // SAFETY: sixteen entries from at ≤ COLLECT fit in buffers of COLLECT + WIDE_LANES.
+    debug_assert!(at <= COLLECT);
+    // SAFETY: sixteen entries from at ≤ COLLECT (the caller's promise) fit in buffers of
+    // COLLECT + WIDE_LANES.
     unsafe {
         _mm512_storeu_si512(
             found.slots.as_mut_ptr().add(at).cast(),
@@ -1976,8 +1993,8 @@ fn compact8(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: u64)
                 _mm256_loadu_ps(d2.as_ptr().add(g)),
             )
         };
-        // w ≤ g < COLLECT.
-        w = pack8(found, w, keep, slots, dists);
+        // SAFETY: w ≤ g < COLLECT; AVX2 is this function's own target.
+        w = unsafe { pack8(found, w, keep as u8, slots, dists) };
         g += NARROW_LANES;
     }
     found.len = w;
@@ -2001,8 +2018,8 @@ fn compact_wide(found: &mut Found, d2: &[f32; COLLECT + LANES], n: usize, kept: 
                 _mm512_loadu_ps(d2.as_ptr().add(g)),
             )
         };
-        // w ≤ g < COLLECT.
-        w = pack16(found, w, keep, slots, dists);
+        // SAFETY: w ≤ g < COLLECT; AVX-512 F is this function's own target.
+        w = unsafe { pack16(found, w, keep, slots, dists) };
         g += WIDE_LANES;
     }
     found.len = w;
