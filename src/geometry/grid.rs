@@ -721,6 +721,11 @@ impl Grid {
         let r2 = radius * radius;
         let reach = Vec3::splat(radius * (1.0 + 1e-5) + 1e-7);
         let (lo, hi) = (self.cell_of(p - reach), self.cell_of(p + reach));
+        #[cfg(target_arch = "x86_64")]
+        if scan.lanes != Lanes::Four && (hi - lo).max_element() <= 2 {
+            // SAFETY: AVX2 wherever the scan is eight lanes wide or more (`Lanes::of_cpu`).
+            return unsafe { self.walk_coarse8(p, lo, hi, r2, scan, found) };
+        }
         let (d, o) = (self.dims, self.origin);
         // The y slabs' distances once, not once per z (at most 3 slabs: the box is at
         // most a hair wider than one coarse cell).
@@ -748,6 +753,46 @@ impl Grid {
             }
         }
         scan.collect_rows(&rows[..m], r2, found);
+    }
+
+    /// [`Grid::walk_coarse`] with AVX2, for a box of at most 3 × 3 rows (`lo..=hi`: the
+    /// contract): its first eight rows in lanes, as [`Grid::walk_cube8`] lists the cube's,
+    /// those past `hi` dropped, the ninth as there. The same rows in the same order.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn walk_coarse8(&self, p: Vec3, lo: IVec3, hi: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
+        use std::arch::x86_64::*;
+        let d = self.dims;
+        // The rows around lo + 1 in y and z: lo.y..=lo.y + 2 and lo.z..=lo.z + 2.
+        let c = lo + IVec3::new(0, 1, 1);
+        let (dz2, dy2) = self.slabs_around(p, c);
+        let (inside, slab, row) = self.rows8(c, (dz2, dy2), &CUBE_ROWS);
+        let int = _mm256_set1_epi32;
+        let (s, e) = self.runs8(row, int(lo.x), int(hi.x));
+        let (mut starts, mut ends) = ([0u32; 9], [0u32; 9]);
+        // SAFETY: each array holds at least eight lanes.
+        unsafe {
+            _mm256_storeu_si256(starts.as_mut_ptr().cast(), s);
+            _mm256_storeu_si256(ends.as_mut_ptr().cast(), e);
+        }
+        // Rows within the box: y ≤ hi.y and z ≤ hi.z, lane by lane, and the ninth.
+        let (ny, nz) = ((hi.y - lo.y) as usize, (hi.z - lo.z) as usize);
+        let mut rows = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) as u32 & IN_BOX[nz][ny];
+        if ny == 2 && nz == 2 {
+            let row = (d.x * (lo.y + 2 + d.y * (lo.z + 2))) as usize;
+            (starts[8], ends[8]) = (
+                self.starts[row + lo.x as usize],
+                self.starts[row + hi.x as usize + 1],
+            );
+            rows |= 1 << 8;
+        }
+        let near = _mm256_cmp_ps::<_CMP_LT_OQ>(slab, _mm256_set1_ps(r2));
+        let keep = rows & (_mm256_movemask_ps(near) as u32 | ((dz2[2] + dy2[2] < r2) as u32) << 8);
+        let mut runs = Runs::new();
+        for l in 0..9 {
+            runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
+        }
+        runs.flush(scan, r2, found);
     }
 
     /// Cells as large as the radius: collects the 9 rows of 3 cells around p, rows beyond
@@ -903,9 +948,7 @@ impl Grid {
         );
         let (dz2, dy2) = self.slabs_around(p, c);
         let int = _mm256_set1_epi32;
-        // `walk_cube`'s rows, z outer and y inner, but for the last (dy, dz) = (1, 1).
-        const OFFSETS: [[i32; 8]; 2] = [[-1, 0, 1, -1, 0, 1, -1, 0], [-1, -1, -1, 0, 0, 0, 1, 1]];
-        let (inside, slab, row) = self.rows8(c, (dz2, dy2), &OFFSETS);
+        let (inside, slab, row) = self.rows8(c, (dz2, dy2), &CUBE_ROWS);
         let (s, e) = self.runs8(row, int(x0 as i32), int(x1 as i32));
         let (mut starts, mut ends) = ([0u32; 9], [0u32; 9]);
         // SAFETY: each array holds at least eight lanes.
@@ -1450,6 +1493,34 @@ impl<'a, T: Copy> Scatter<'a, T> {
         unsafe { self.ptr.add(i).write(v) }
     }
 }
+
+/// The y and z offsets of the first eight of the 3 × 3 rows around a cell, z outer and y
+/// inner (`Grid::walk_cube`'s order), one per lane; the ninth is (+1, +1).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+const CUBE_ROWS: [[i32; 8]; 2] = [[-1, 0, 1, -1, 0, 1, -1, 0], [-1, -1, -1, 0, 0, 0, 1, 1]];
+
+/// Of [`CUBE_ROWS`]' eight lanes, those within a box of `nz + 1` slabs in z and `ny + 1` in
+/// y from its lowest: `IN_BOX[nz][ny]`.
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+const IN_BOX: [[u32; 3]; 3] = {
+    let mut t = [[0; 3]; 3];
+    let mut nz = 0;
+    while nz < 3 {
+        let mut ny = 0;
+        while ny < 3 {
+            let mut l = 0;
+            while l < 8 {
+                if CUBE_ROWS[0][l] < ny as i32 && CUBE_ROWS[1][l] < nz as i32 {
+                    t[nz][ny] |= 1 << l;
+                }
+                l += 1;
+            }
+            ny += 1;
+        }
+        nz += 1;
+    }
+    t
+};
 
 /// Candidates a query holds: with more, it keeps the k nearest so far and goes on.
 const COLLECT: usize = 64;
