@@ -718,14 +718,15 @@ impl Grid {
     /// widened by a hair against rounding), rows beyond the radius skipped.
     fn walk_coarse(&self, p: Vec3, radius: f32, scan: &Scan, found: &mut Found) {
         debug_assert!(radius <= self.fine.cell, "a query within the grid's radius");
-        let r2 = radius * radius;
-        let reach = Vec3::splat(radius * (1.0 + 1e-5) + 1e-7);
-        let (lo, hi) = (self.cell_of(p - reach), self.cell_of(p + reach));
+        // SAFETY: AVX2 wherever the scan is eight lanes wide or more (`Lanes::of_cpu`).
         #[cfg(target_arch = "x86_64")]
-        if scan.lanes != Lanes::Four && (hi - lo).max_element() <= 2 {
-            // SAFETY: AVX2 wherever the scan is eight lanes wide or more (`Lanes::of_cpu`).
-            return unsafe { self.walk_coarse8(p, lo, hi, r2, scan, found) };
+        if scan.lanes != Lanes::Four
+            && unsafe { self.walk_coarse8(p.x, p.y, p.z, radius, scan, found) }
+        {
+            return;
         }
+        let r2 = radius * radius;
+        let (lo, hi) = self.coarse_box(p, radius);
         let (d, o) = (self.dims, self.origin);
         // The y slabs' distances once, not once per z (at most 3 slabs: the box is at
         // most a hair wider than one coarse cell).
@@ -755,13 +756,37 @@ impl Grid {
         scan.collect_rows(&rows[..m], r2, found);
     }
 
-    /// [`Grid::walk_coarse`] with AVX2, for a box of at most 3 × 3 rows (`lo..=hi`: the
-    /// contract): its first eight rows in lanes, as [`Grid::walk_cube8`] lists the cube's,
-    /// those past `hi` dropped, the ninth as there. The same rows in the same order.
+    /// The coarse cells `lo..=hi` the box of the sphere of `radius` around p reaches,
+    /// widened by a hair against rounding.
+    #[inline(always)]
+    fn coarse_box(&self, p: Vec3, radius: f32) -> (IVec3, IVec3) {
+        let reach = Vec3::splat(radius * (1.0 + 1e-5) + 1e-7);
+        (self.cell_of(p - reach), self.cell_of(p + reach))
+    }
+
+    /// [`Grid::walk_coarse`] with AVX2, for a box of at most 3 × 3 rows (the contract):
+    /// its first eight rows in lanes, as [`Grid::walk_cube8`] lists the cube's, those past
+    /// the box dropped, the ninth as there. The same rows in the same order. Returns false,
+    /// having collected nothing, for a box beyond the contract. (The point comes as
+    /// scalars, as in `walk_cube8`, and why.)
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn walk_coarse8(&self, p: Vec3, lo: IVec3, hi: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
+    fn walk_coarse8(
+        &self,
+        px: f32,
+        py: f32,
+        pz: f32,
+        radius: f32,
+        scan: &Scan,
+        found: &mut Found,
+    ) -> bool {
         use std::arch::x86_64::*;
+        let p = Vec3::new(px, py, pz);
+        let (lo, hi) = self.coarse_box(p, radius);
+        if (hi - lo).max_element() > 2 {
+            return false;
+        }
+        let r2 = radius * radius;
         let d = self.dims;
         // The rows around lo + 1 in y and z: lo.y..=lo.y + 2 and lo.z..=lo.z + 2.
         let c = lo + IVec3::new(0, 1, 1);
@@ -793,6 +818,7 @@ impl Grid {
             runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
         }
         runs.flush(scan, r2, found);
+        true
     }
 
     /// Cells as large as the radius: collects the 9 rows of 3 cells around p, rows beyond
@@ -805,7 +831,7 @@ impl Grid {
         #[cfg(target_arch = "x86_64")]
         if scan.lanes != Lanes::Four {
             // SAFETY: AVX2 wherever the scan is eight lanes wide or more (`Lanes::of_cpu`).
-            return unsafe { self.walk_cube8(p, c, r2, scan, found) };
+            return unsafe { self.walk_cube8(p.x, p.y, p.z, r2, scan, found) };
         }
         let (d, o) = (self.dims, self.origin);
         let (x0, x1) = (
@@ -939,8 +965,14 @@ impl Grid {
     /// the same runs.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn walk_cube8(&self, p: Vec3, c: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
+    fn walk_cube8(&self, px: f32, py: f32, pz: f32, r2: f32, scan: &Scan, found: &mut Found) {
         use std::arch::x86_64::*;
+        // The point comes as three scalars, in registers, and its cell is worked out here:
+        // a `Vec3` or `IVec3` argument goes by reference to the caller's stack, and the
+        // 8-byte load of its y and z there spans two of the caller's stores, which the CPU
+        // cannot forward (about a sixth of this function's time under `perf`).
+        let p = Vec3::new(px, py, pz);
+        let c = self.cell_of(p);
         let d = self.dims;
         let (x0, x1) = (
             (c.x - self.split).max(0) as usize,
@@ -974,26 +1006,30 @@ impl Grid {
         let sum = _mm_add_epi32(sum, _mm_shuffle_epi32::<0b01>(sum));
         let count = _mm_cvtsi128_si32(sum) as u32 + (ends[8] - starts[8]) * (rows >> 8);
         let cells = ((x1 - x0 + 1) as u32 * rows.count_ones()) as f32 / self.split as f32;
-        // The rows in the grid whose slab lies within r2, in order.
-        let collect = |r2: f32, found: &mut Found| {
-            let near = _mm256_cmp_ps::<_CMP_LT_OQ>(slab, _mm256_set1_ps(r2));
-            let keep = rows & (_mm256_movemask_ps(near) as u32 | ((slab8 < r2) as u32) << 8);
+        // Out to the guess, if it falls short of the radius, then (if that found fewer than
+        // k) out to the radius. (One place collects, for both: a closure called twice was
+        // not inlined.)
+        let cubed = self.kth_distance_cubed(scan.k, count, cells);
+        let mut reach = r2;
+        if cubed < r2 * r2.sqrt() {
+            let guess = rough_cbrt(cubed);
+            reach = (guess * guess).min(r2);
+        }
+        loop {
+            // The rows in the grid whose slab lies within reach, in order.
+            let near = _mm256_cmp_ps::<_CMP_LT_OQ>(slab, _mm256_set1_ps(reach));
+            let keep = rows & (_mm256_movemask_ps(near) as u32 | ((slab8 < reach) as u32) << 8);
             let mut runs = Runs::new();
             for l in 0..9 {
                 runs.put((starts[l], ends[l]), (keep >> l) & 1 != 0);
             }
-            runs.flush(scan, r2, found);
-        };
-        let cubed = self.kth_distance_cubed(scan.k, count, cells);
-        if cubed < r2 * r2.sqrt() {
-            let guess = rough_cbrt(cubed);
-            collect((guess * guess).min(r2), found);
-            if found.len >= scan.k {
+            runs.flush(scan, reach, found);
+            if reach == r2 || found.len >= scan.k {
                 return;
             }
             found.len = 0;
+            reach = r2;
         }
-        collect(r2, found);
     }
 
     /// Collects rows of cells along x, in rings of growing Chebyshev distance from p's row
