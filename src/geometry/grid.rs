@@ -584,7 +584,7 @@ impl Grid {
         } else if self.cell >= radius {
             // Cells as large as the radius: the 27 around p hold every neighbour. One pass
             // over 9 rows of 3 cells, rows beyond the radius skipped.
-            self.walk_cube(p, self.cell_of(p), radius * radius, &scan, found);
+            self.walk_cube(p, radius * radius, &scan, found);
         } else {
             // A crowd: first a walk out to a guess of the k-th neighbour's distance from
             // the local density, which bounds the rows walked and the candidates collected.
@@ -827,12 +827,13 @@ impl Grid {
     /// elsewhere), it first collects only out to a guess of the k-th neighbour's distance,
     /// as a crowd's walk does: finding k there proves the k nearest are among them, and
     /// the query keeps fewer candidates; otherwise it collects out to the radius.
-    fn walk_cube(&self, p: Vec3, c: IVec3, r2: f32, scan: &Scan, found: &mut Found) {
+    fn walk_cube(&self, p: Vec3, r2: f32, scan: &Scan, found: &mut Found) {
         #[cfg(target_arch = "x86_64")]
         if scan.lanes != Lanes::Four {
             // SAFETY: AVX2 wherever the scan is eight lanes wide or more (`Lanes::of_cpu`).
             return unsafe { self.walk_cube8(p.x, p.y, p.z, r2, scan, found) };
         }
+        let c = self.cell_of(p);
         let (d, o) = (self.dims, self.origin);
         let (x0, x1) = (
             (c.x - self.split).max(0) as usize,
